@@ -1,0 +1,32 @@
+# The README's two commands: `make run` (main study) and `make test` (whole test suite).
+# Each creates the virtual environment it needs on first use (python3 -m venv + pip install -e).
+
+PYTHON ?= python3
+VENV   ?= .venv
+PIP     = $(VENV)/bin/python -m pip
+PY      = $(VENV)/bin/python
+OUT    ?= results/linear_pid_accuracy
+
+.PHONY: run test install install-test clean
+
+$(VENV)/.core: pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PIP) install --upgrade pip
+	$(PIP) install -e .
+	touch $@
+
+$(VENV)/.test: $(VENV)/.core
+	$(PIP) install -e ".[test]"
+	touch $@
+
+install: $(VENV)/.core
+install-test: $(VENV)/.test
+
+run: $(VENV)/.core
+	$(PY) -m experiments run linear_pid_accuracy --out $(OUT)
+
+test: $(VENV)/.test
+	$(PY) -m pytest
+
+clean:
+	rm -rf $(VENV) .jax_cache .pytest_cache results

@@ -1,0 +1,1 @@
+"""Studies reproducing the seed papers' systems, and the ``python -m experiments`` CLI."""

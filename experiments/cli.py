@@ -1,0 +1,57 @@
+"""Command line: ``python -m experiments list`` and ``python -m experiments run NAME``."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+import time
+from pathlib import Path
+
+from experiments.config_overrides import apply_overrides
+from experiments.progress import bar
+from experiments.registry import all_studies, get_study
+from experiments.report import write_report
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m experiments",
+        description="Run the toolkit's studies (each reproduces a seed paper's system).",
+    )
+    sub = p.add_subparsers(dest="command", required=True)
+    sub.add_parser("list", help="list the studies and their default configs")
+    run = sub.add_parser("run", help="run one study and write results.json, CSV tables and PNG plots")
+    run.add_argument("name", metavar="NAME", help="study name (see `list`)")
+    run.add_argument("--quick", action="store_true", help="small, fast version (CI smoke runs)")
+    run.add_argument("--out", default=None, help="output folder (default: results/NAME)")
+    run.add_argument(
+        "--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+        help="override a config field (repeatable), e.g. --set t_final=20",
+    )
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        if args.command == "list":
+            for name, study in all_studies().items():
+                print(f"{name:28s} {study.description}")
+                for f in dataclasses.fields(study.config_cls):
+                    print(f"    {f.name} = {getattr(study.default_config(), f.name)!r}")
+            return 0
+        study = get_study(args.name)
+        config = apply_overrides(study.default_config(quick=args.quick), args.overrides)
+        out = Path(args.out) if args.out else Path("results") / study.name
+        print(f"[{study.name}] config: {config}", file=sys.stderr)
+        start = time.perf_counter()
+        result = study.run(config, bar)
+        path = write_report(study.name, config, result, out)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(f"[{study.name}] done in {time.perf_counter() - start:.1f} s; wrote {path}", file=sys.stderr)
+    for key, value in result.metrics.items():
+        print(f"  {key} = {value:.6g}")
+    return 0

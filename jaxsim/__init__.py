@@ -1,0 +1,17 @@
+"""jaxsim: differentiable simulation, estimation and tuning for control engineering, in pure JAX.
+
+Sub-packages:
+
+* :mod:`jaxsim.core` — integrators, discretisation, the closed-loop rollout, signals, metrics,
+  linearisation, transfer functions;
+* :mod:`jaxsim.plants` — one module per plant family of the seed papers;
+* :mod:`jaxsim.control` — controllers (PID, ...) and their design rules.
+
+Importing the package enables float64 (see :mod:`jaxsim.precision`).
+"""
+
+from jaxsim.precision import enable_x64_from_env as _enable_x64_from_env
+
+_enable_x64_from_env()
+
+__version__ = "0.1.0"

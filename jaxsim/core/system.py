@@ -1,0 +1,107 @@
+"""The parts a closed loop is built from: plant, controller, sensor, estimator.
+
+Parameters are validated by the factory functions that build the parts (the public boundary),
+not on every pytree unflatten: gradients and optimiser states share these structures.
+
+Each part bundles its parameters (a pytree: arrays a user may tune or vmap over) with the pure
+functions that use them (static metadata, part of the jit cache key).  Plant and controller
+modules build these bundles from their own ``Params`` dataclass and functions, e.g.
+``jaxsim.plants.second_order.static_plant()`` or ``jaxsim.control.pid.pid(...)``.
+
+Signatures (``x`` plant state ``(n,)``, ``u`` plant input ``(m,)``, ``y`` output ``(p,)``,
+``r`` reference ``(k,)``, ``t`` time, ``dt`` step or period in the same unit):
+
+* plant: ``dynamics(params, x, u, t) -> ẋ``, ``output(params, x) -> y``;
+* controller: ``init(params, r0, y0) -> state``, ``step(params, state, r, y, dt) -> (state, u)``;
+* sensor: ``measure(params, key, y, t) -> y_meas``;
+* estimator: ``init(params, y0) -> state``, ``predict(params, state, u, dt) -> state``,
+  ``update(params, state, y_meas) -> state``, ``read(params, state) -> what the controller sees``.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import jax
+import jax.numpy as jnp
+
+from jaxsim.core.pytree import pytree_dataclass, static_field
+from jaxsim.core.validation import is_concrete
+
+
+@pytree_dataclass
+class Plant:
+    """A plant: parameters plus ``dynamics`` and ``output`` functions."""
+
+    params: Any
+    dynamics: Callable[[Any, jax.Array, jax.Array, jax.Array], jax.Array] = static_field()
+    output: Callable[[Any, jax.Array], jax.Array] = static_field()
+    n_states: int = static_field()
+    n_inputs: int = static_field()
+    n_outputs: int = static_field()
+    name: str = static_field(default="plant")
+
+    def f(self, x: jax.Array, u: jax.Array, t: jax.Array) -> jax.Array:
+        """``ẋ = dynamics(params, x, u, t)``."""
+        return self.dynamics(self.params, x, u, t)
+
+    def h(self, x: jax.Array) -> jax.Array:
+        """``y = output(params, x)``."""
+        return self.output(self.params, x)
+
+
+@pytree_dataclass
+class Controller:
+    """A discrete-time controller run at its own period with zero-order hold on its output."""
+
+    params: Any
+    init: Callable[[Any, jax.Array, jax.Array], Any] = static_field()
+    step: Callable[[Any, Any, jax.Array, jax.Array, Any], tuple[Any, jax.Array]] = static_field()
+    name: str = static_field(default="controller")
+
+
+def _gaussian_measure(params: Any, key: jax.Array, y: jax.Array, t: jax.Array) -> jax.Array:
+    std = jnp.asarray(params)
+    return y + std * jax.random.normal(key, y.shape, dtype=y.dtype)
+
+
+@pytree_dataclass
+class Sensor:
+    """A sensor delivering ``measure(params, key, y, t)`` every ``period`` (None: every tick)."""
+
+    params: Any = 0.0
+    measure: Callable[[Any, jax.Array, jax.Array, jax.Array], jax.Array] = static_field(
+        default=_gaussian_measure
+    )
+    period: float | None = static_field(default=None)
+    name: str = static_field(default="sensor")
+
+
+def gaussian_sensor(std: Any = 0.0, period: float | None = None) -> Sensor:
+    """Additive white Gaussian noise of standard deviation ``std`` (scalar or ``(p,)``)."""
+    std_arr = jnp.asarray(std)
+    if is_concrete(std_arr) and bool(jnp.any(~jnp.isfinite(std_arr) | (std_arr < 0))):
+        raise ValueError(f"std: must be finite and non-negative, got {std!r}")
+    return Sensor(params=std_arr, measure=_gaussian_measure, period=period, name="gaussian")
+
+
+@pytree_dataclass
+class Estimator:
+    """An estimator that predicts every controller tick and updates when a measurement arrives."""
+
+    params: Any
+    init: Callable[[Any, jax.Array], Any] = static_field()
+    predict: Callable[[Any, Any, jax.Array, Any], Any] = static_field()
+    update: Callable[[Any, Any, jax.Array], Any] = static_field()
+    read: Callable[[Any, Any], jax.Array] = static_field()
+    name: str = static_field(default="estimator")
+
+
+def subtract_input_disturbance(u: jax.Array, d: jax.Array) -> jax.Array:
+    """Plant input ``u − d``: the disturbance acts at the plant input (fuzzy-PID paper's sign)."""
+    return u - d
+
+
+def add_input_disturbance(u: jax.Array, d: jax.Array) -> jax.Array:
+    """Plant input ``u + d``."""
+    return u + d

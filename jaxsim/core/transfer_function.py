@@ -1,0 +1,72 @@
+"""SISO transfer functions ↔ state space (controller canonical form, as ``scipy.signal``).
+
+Polynomials are 1-D arrays in descending powers of ``s``.  Both directions are pure ``jnp`` code,
+so they differentiate and vmap (the characteristic polynomial uses the Faddeev–LeVerrier
+recursion, exact in exact arithmetic and fine for the small orders of control models).
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+from jaxsim.core.validation import check_finite, check_square, is_concrete
+
+
+def tf2ss(num: jax.Array, den: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array, jax.Array]:
+    """``num/den`` (proper) → ``(A, B, C, D)`` in the same canonical form as ``scipy.signal.tf2ss``.
+
+    Shapes: ``A (n, n)``, ``B (n, 1)``, ``C (1, n)``, ``D (1, 1)`` with ``n = len(den) − 1``.
+    """
+    num = jnp.atleast_1d(jnp.asarray(num, dtype=float))
+    den = jnp.atleast_1d(jnp.asarray(den, dtype=float))
+    check_finite("num", num)
+    check_finite("den", den)
+    if num.ndim != 1 or den.ndim != 1:
+        raise ValueError(f"num/den: expected 1-D coefficient arrays, got {num.shape} and {den.shape}")
+    if num.shape[0] > den.shape[0]:
+        raise ValueError(f"num: improper transfer function (len(num)={num.shape[0]} > len(den)={den.shape[0]})")
+    if is_concrete(den) and float(den[0]) == 0.0:
+        raise ValueError("den: leading coefficient must be non-zero")
+    n = den.shape[0] - 1
+    num = jnp.concatenate([jnp.zeros(den.shape[0] - num.shape[0]), num]) / den[0]
+    den = den / den[0]
+    d = num[:1].reshape(1, 1)
+    if n == 0:
+        return jnp.zeros((0, 0)), jnp.zeros((0, 1)), jnp.zeros((1, 0)), d
+    a = jnp.zeros((n, n)).at[0, :].set(-den[1:]).at[1:, :-1].set(jnp.eye(n - 1))
+    b = jnp.zeros((n, 1)).at[0, 0].set(1.0)
+    c = (num[1:] - num[0] * den[1:]).reshape(1, n)
+    return a, b, c, d
+
+
+def characteristic_polynomial(a: jax.Array) -> jax.Array:
+    """Coefficients of ``det(sI − A)``, shape ``(n + 1,)``, leading 1 (Faddeev–LeVerrier)."""
+    a = jnp.asarray(a)
+    check_square("a", a)
+    n = a.shape[0]
+    coeffs = [jnp.ones((), a.dtype)]
+    m = jnp.zeros_like(a)
+    eye = jnp.eye(n, dtype=a.dtype)
+    for k in range(1, n + 1):
+        m = a @ m + coeffs[-1] * eye
+        coeffs.append(-jnp.trace(a @ m) / k)
+    return jnp.stack(coeffs)
+
+
+def ss2tf(a: jax.Array, b: jax.Array, c: jax.Array, d: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """SISO ``(A, B, C, D)`` → ``(num, den)``, both of length ``n + 1``.
+
+    Uses ``num = det(sI − A + B C) + (D − 1)·det(sI − A)`` (as ``scipy.signal.ss2tf``).
+    """
+    a, b, c, d = (jnp.atleast_2d(jnp.asarray(m, dtype=float)) for m in (a, b, c, d))
+    check_square("a", a)
+    n = a.shape[0]
+    if b.shape != (n, 1):
+        raise ValueError(f"b: expected shape ({n}, 1) for a SISO system, got {tuple(b.shape)}")
+    if c.shape != (1, n):
+        raise ValueError(f"c: expected shape (1, {n}) for a SISO system, got {tuple(c.shape)}")
+    if d.shape != (1, 1):
+        raise ValueError(f"d: expected shape (1, 1), got {tuple(d.shape)}")
+    den = characteristic_polynomial(a)
+    num = characteristic_polynomial(a - b @ c) + (d[0, 0] - 1.0) * den
+    return num, den

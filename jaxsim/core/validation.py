@@ -1,0 +1,72 @@
+"""Argument checks at the public boundary.
+
+Each check raises ``ValueError`` naming the offending argument.  Checks look at concrete values
+only: when an argument is a JAX tracer (inside ``jit``/``vmap``/``grad``) the value-dependent part is
+skipped and only the static shape is checked, so the same public function works both eagerly and
+under transformations.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import jax
+import numpy as np
+
+
+def is_concrete(x: Any) -> bool:
+    """True when ``x`` holds values we can inspect (not a tracer)."""
+    return not any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(x))
+
+
+def check_shape(name: str, x: Any, shape: tuple[int | None, ...]) -> None:
+    """Require ``x.shape`` to match ``shape`` (``None`` matches any length)."""
+    actual = tuple(np.shape(x))
+    ok = len(actual) == len(shape) and all(s is None or s == a for s, a in zip(shape, actual))
+    if not ok:
+        want = "(" + ", ".join("any" if s is None else str(s) for s in shape) + ")"
+        raise ValueError(f"{name}: expected shape {want}, got {actual}")
+
+
+def check_finite(name: str, x: Any) -> None:
+    """Require every leaf of ``x`` to be finite (no NaN or inf)."""
+    if not is_concrete(x):
+        return
+    for leaf in jax.tree_util.tree_leaves(x):
+        arr = np.asarray(leaf)
+        if arr.dtype.kind in "fc" and not np.all(np.isfinite(arr)):
+            raise ValueError(f"{name}: must be finite, got {arr!r}")
+
+
+def check_positive(name: str, x: Any, *, allow_zero: bool = False) -> None:
+    """Require ``x`` finite and > 0 (or ≥ 0 with ``allow_zero``) element-wise."""
+    check_finite(name, x)
+    if not is_concrete(x):
+        return
+    arr = np.asarray(x)
+    bad = arr < 0 if allow_zero else arr <= 0
+    if np.any(bad):
+        rel = "non-negative" if allow_zero else "positive"
+        raise ValueError(f"{name}: must be {rel}, got {arr!r}")
+
+
+def check_period_multiple(name: str, period: float, base: float, base_name: str) -> int:
+    """Require ``period`` to be a positive integer multiple of ``base``; return the ratio."""
+    check_positive(name, period)
+    check_positive(base_name, base)
+    ratio = float(period) / float(base)
+    n = int(round(ratio))
+    if n < 1 or not math.isclose(ratio, n, rel_tol=1e-9, abs_tol=1e-9):
+        raise ValueError(
+            f"{name}: must be an integer multiple of {base_name}={base!r}, got {period!r} "
+            f"(ratio {ratio:.6g})"
+        )
+    return n
+
+
+def check_square(name: str, m: Any) -> None:
+    """Require a square 2-D matrix."""
+    shape = np.shape(m)
+    if len(shape) != 2 or shape[0] != shape[1]:
+        raise ValueError(f"{name}: expected a square matrix, got shape {tuple(shape)}")

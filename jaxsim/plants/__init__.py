@@ -1,0 +1,1 @@
+"""Plants of the seed papers, one module per family (``Params`` + ``dynamics`` + ``output``)."""

@@ -1,0 +1,1 @@
+"""Tuning layer: reparametrisations, gradient tuner, particle-swarm baseline, comparison harness."""

@@ -1,0 +1,18 @@
+"""Test configuration: float64, JAX's persistent compilation cache, shared helpers."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import jax
+
+ROOT = Path(__file__).resolve().parents[1]
+CACHE_DIR = Path(os.environ.get("JAXSIM_TEST_CACHE", ROOT / ".jax_cache"))
+
+jax.config.update("jax_enable_x64", True)
+jax.config.update("jax_compilation_cache_dir", str(CACHE_DIR))
+jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
+jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+
+import jaxsim  # noqa: E402,F401  (precision set up in one place)

@@ -1,0 +1,46 @@
+"""Linearisation by jacfwd against the closed-form state space of the paper's plants."""
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+import scipy.signal
+
+from jaxsim.core.linearize import find_equilibrium, linearize
+from jaxsim.core.system import Plant
+from jaxsim.core.transfer_function import ss2tf
+from jaxsim.plants.second_order import astatic_plant, static_plant
+
+
+def test_linearised_second_order_plants_have_the_paper_transfer_functions():
+    lin = linearize(static_plant(), jnp.zeros(2), jnp.zeros(1))
+    num, den = ss2tf(lin.a, lin.b, lin.c, lin.d)
+    num_ref, den_ref = scipy.signal.normalize([2.0], [0.05, 0.6, 1.0])
+    np.testing.assert_allclose(den, den_ref, rtol=1e-13)
+    np.testing.assert_allclose(np.trim_zeros(np.asarray(num), "f"), num_ref[0], rtol=1e-13)
+    lin = linearize(astatic_plant(), jnp.zeros(2), jnp.zeros(1))
+    np.testing.assert_allclose(lin.a, [[0.0, 1.0], [0.0, -10.0]])
+    np.testing.assert_allclose(lin.b, [[0.0], [20.0]])
+    np.testing.assert_allclose(lin.c, [[1.0, 0.0]])
+
+
+def pendulum_dynamics(p, x, u, t):
+    return jnp.array([x[1], -p["g"] * jnp.sin(x[0]) - p["c"] * x[1] + u[0]])
+
+
+PEND = Plant({"g": 9.81, "c": 0.3}, pendulum_dynamics, lambda p, x: x[:1], 2, 1, 1, "pendulum")
+
+
+def test_equilibrium_and_linearisation_of_a_nonlinear_plant():
+    u_eq = jnp.array([9.81 * np.sin(0.4)])
+    eq = find_equilibrium(lambda x: PEND.f(x, u_eq, 0.0), jnp.array([0.3, 0.1]))
+    np.testing.assert_allclose(eq.z, [0.4, 0.0], atol=1e-12)
+    assert float(eq.residual_norm) < 1e-12
+    lin = linearize(PEND, eq.z, u_eq)
+    np.testing.assert_allclose(lin.a, [[0.0, 1.0], [-9.81 * np.cos(0.4), -0.3]], rtol=1e-12)
+
+
+def test_bad_shapes():
+    with pytest.raises(ValueError, match="x0: expected shape"):
+        linearize(PEND, jnp.zeros(3), jnp.zeros(1))
+    with pytest.raises(ValueError, match="u0: expected shape"):
+        linearize(PEND, jnp.zeros(2), jnp.zeros(2))
