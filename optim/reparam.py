@@ -9,14 +9,16 @@ reparametrisation has ``forward(u) -> x`` and ``inverse(x) -> u`` and is a froze
 * :class:`Interval` — ``x = lo + (hi − lo)·sigmoid(u)``: ``lo < x < hi``;
 * :class:`SortedBreakpoints` — ``x_i = lo + Σ_{j≤i} (min_gap + softplus(u_j))``: strictly
   increasing, ``x_0 > lo``, gaps ``≥ min_gap`` (fuzzy-set breakpoints stay ordered);
-* :class:`SPDMatrix` — ``X = L Lᵀ`` with ``L`` lower triangular, positive diagonal
-  ``softplus(u_diag) + eps``: symmetric positive definite (weights Q, R, covariances);
+* :class:`SPDMatrix` — ``X = L Lᵀ + eps·I`` with ``L`` lower triangular, positive diagonal
+  ``softplus(u_diag)``: symmetric positive definite (weights Q, R, covariances);
 * :class:`Simplex` — ``x = softmax([u, 0])``: ``x > 0``, ``Σx = 1`` (mixing weights);
 * :class:`Identity`.
 
 In floating point the strict inequalities hold while ``|u|`` stays below about 30 (beyond that
 ``sigmoid``/``softplus`` round to their limits and ``x`` may touch a bound); use ``min_gap > 0`` or
-``floor``/``eps`` margins where touching matters.
+``floor`` margins where touching matters.  ``L Lᵀ`` is positive definite in exact arithmetic but
+can be numerically singular when ``L`` mixes tiny diagonals with large off-diagonals (|u| ≳ 5);
+``SPDMatrix(n, eps)`` with ``eps > 0`` keeps every eigenvalue ``≥ eps``.
 
 :func:`apply` and :func:`invert` map a pytree of reparametrisations over a matching pytree of
 parameters; a reparametrisation placed over a sub-tree applies to each of its arrays, and ``None``
@@ -196,10 +198,10 @@ def _tril(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 @pytree_dataclass
 class SPDMatrix(Reparam):
-    """``u`` ``(n(n+1)/2,)`` → symmetric positive-definite ``X = L Lᵀ`` ``(n, n)``.
+    """``u`` ``(n(n+1)/2,)`` → symmetric positive-definite ``X = L Lᵀ + eps·I`` ``(n, n)``.
 
     ``L`` is lower triangular, filled row by row from ``u`` (NumPy's ``tril_indices`` order), with
-    diagonal ``softplus(u_ii) + eps`` (``eps ≥ 0`` bounds the smallest eigenvalue away from zero).
+    diagonal ``softplus(u_ii)``; ``eps ≥ 0`` is a floor on the eigenvalues of ``X``.
     """
 
     n: int = static_field()
@@ -217,19 +219,19 @@ class SPDMatrix(Reparam):
         rows, cols = _tril(self.n)
         if u.shape[-1] != rows.size:
             raise ValueError(f"u: SPDMatrix({self.n}) needs {rows.size} entries, got shape {u.shape}")
-        diag = rows == cols
-        vals = jnp.where(diag, jax.nn.softplus(u) + self.eps, u)
+        vals = jnp.where(rows == cols, jax.nn.softplus(u), u)
         return jnp.zeros(u.shape[:-1] + (self.n, self.n), u.dtype).at[..., rows, cols].set(vals)
 
     def forward(self, u: jax.Array) -> jax.Array:
         low = self.cholesky_factor(u)
-        return low @ jnp.swapaxes(low, -1, -2)
+        return low @ jnp.swapaxes(low, -1, -2) + self.eps * jnp.eye(self.n, dtype=low.dtype)
 
     def inverse(self, x: jax.Array) -> jax.Array:
-        low = jnp.linalg.cholesky(jnp.asarray(x))
+        x = jnp.asarray(x)
+        low = jnp.linalg.cholesky(x - self.eps * jnp.eye(self.n, dtype=x.dtype))
         rows, cols = _tril(self.n)
         vals = low[..., rows, cols]
-        return jnp.where(rows == cols, softplus_inverse(jnp.maximum(vals - self.eps, 1e-300)), vals)
+        return jnp.where(rows == cols, softplus_inverse(jnp.maximum(vals, 1e-300)), vals)
 
     def check(self, name: str, x: Any) -> None:
         arr = _numeric(x)
@@ -239,13 +241,11 @@ class SPDMatrix(Reparam):
             raise ValueError(f"{name}: expected an ({self.n}, {self.n}) matrix, got shape {arr.shape}")
         if not np.allclose(arr, np.swapaxes(arr, -1, -2), rtol=1e-10, atol=1e-12):
             raise ValueError(f"{name}: must be symmetric")
-        try:
-            low = np.linalg.cholesky(arr)
-        except np.linalg.LinAlgError:
-            raise ValueError(f"{name}: must be positive definite") from None
         eps = _numeric(self.eps)
-        if eps is not None and not np.all(np.diagonal(low, axis1=-2, axis2=-1) > eps):
-            raise ValueError(f"{name}: Cholesky diagonal must exceed eps={self.eps!r}")
+        try:
+            np.linalg.cholesky(arr - (0.0 if eps is None else eps) * np.eye(self.n))
+        except np.linalg.LinAlgError:
+            raise ValueError(f"{name}: must be positive definite with eigenvalues > eps={self.eps!r}") from None
 
 
 @pytree_dataclass

@@ -24,24 +24,31 @@ import numpy as np
 from optim.results import SearchHistory, SearchResult, as_box, check_int
 
 
-def grid_points(lo: jax.Array, hi: jax.Array, counts: tuple[int, ...], flat_index: jax.Array) -> jax.Array:
+def grid_axes(lo: np.ndarray, hi: np.ndarray, counts: tuple[int, ...]) -> np.ndarray:
+    """Axis values ``(d, max(counts))``: ``linspace(lo_i, hi_i, counts_i)`` (centre if 1), padded."""
+    table = np.zeros((len(counts), max(counts)))
+    for i, (a, b, c) in enumerate(zip(lo, hi, counts)):
+        table[i, :c] = np.linspace(a, b, c) if c > 1 else (a + b) / 2
+    return table
+
+
+def grid_points(axes: jax.Array, counts: tuple[int, ...], flat_index: jax.Array) -> jax.Array:
     """Grid points of the given flat indices (C order, last axis fastest), shape ``(..., d)``."""
     counts_np = np.asarray(counts, dtype=np.int64)
     strides = np.concatenate([np.cumprod(counts_np[::-1])[::-1][1:], [1]])
-    counts_j = jnp.asarray(counts_np)
-    multi = (flat_index[..., None] // jnp.asarray(strides)) % counts_j
-    frac = jnp.where(counts_j > 1, multi / jnp.maximum(counts_j - 1, 1), 0.5)
-    return lo + (hi - lo) * frac
+    multi = (flat_index[..., None] // jnp.asarray(strides)) % jnp.asarray(counts_np)
+    return axes[jnp.arange(len(counts)), multi]
 
 
 @functools.partial(jax.jit, static_argnames=("loss", "grid", "batch_size", "n"))
-def _best_of_batch(b: jax.Array, key: jax.Array, lo: jax.Array, hi: jax.Array, *, loss: Callable,
+def _best_of_batch(b: jax.Array, source: jax.Array, lo: jax.Array, hi: jax.Array, *, loss: Callable,
                    grid: tuple[int, ...] | None, batch_size: int, n: int) -> tuple[jax.Array, jax.Array]:
-    """Best ``(loss, x)`` of batch ``b``: random points (``grid=None``) or grid points."""
+    """Best ``(loss, x)`` of batch ``b``: random points (``grid=None``, ``source`` a PRNG key) or
+    grid points (``source`` the axis values of :func:`grid_axes`)."""
     if grid is None:
-        x = jax.random.uniform(jax.random.fold_in(key, b), (batch_size, lo.shape[0]), lo.dtype, lo, hi)
+        x = jax.random.uniform(jax.random.fold_in(source, b), (batch_size, lo.shape[0]), lo.dtype, lo, hi)
     else:
-        x = grid_points(lo, hi, grid, jnp.minimum(b * batch_size + jnp.arange(batch_size), n - 1))
+        x = grid_points(source, grid, jnp.minimum(b * batch_size + jnp.arange(batch_size), n - 1))
     vals = jax.vmap(loss)(x)
     valid = (b * batch_size + jnp.arange(batch_size)) < n
     vals = jnp.where(valid & jnp.isfinite(vals), vals, jnp.inf)
@@ -49,7 +56,7 @@ def _best_of_batch(b: jax.Array, key: jax.Array, lo: jax.Array, hi: jax.Array, *
     return vals[i], x[i]
 
 
-def _run_batches(loss: Callable[[jax.Array], jax.Array], key: jax.Array, lo: jax.Array, hi: jax.Array,
+def _run_batches(loss: Callable[[jax.Array], jax.Array], source: jax.Array, lo: jax.Array, hi: jax.Array,
                  grid: tuple[int, ...] | None, n: int, batch_size: int, sims_per_eval: int,
                  label: str) -> SearchResult:
     """Evaluate ``ceil(n / batch_size)`` batches, keeping the best point."""
@@ -57,13 +64,13 @@ def _run_batches(loss: Callable[[jax.Array], jax.Array], key: jax.Array, lo: jax
     static = dict(loss=loss, grid=grid, batch_size=batch_size, n=n)
     b0 = jnp.asarray(0, jnp.int32)
     t0 = time.perf_counter()
-    _best_of_batch.lower(b0, key, lo, hi, **static).compile()  # cached by jit for the loop below
+    _best_of_batch.lower(b0, source, lo, hi, **static).compile()  # cached by jit for the loop below
     compile_s = time.perf_counter() - t0
     best_loss, best_x = np.inf, None
     hist_best, hist_wall = np.empty(n_batches), np.empty(n_batches)
     start = time.perf_counter()
     for b in range(n_batches):
-        val, x = _best_of_batch(jnp.asarray(b, jnp.int32), key, lo, hi, **static)
+        val, x = _best_of_batch(jnp.asarray(b, jnp.int32), source, lo, hi, **static)
         val = float(val)
         if val < best_loss or best_x is None:
             best_loss, best_x = val, x
@@ -120,5 +127,5 @@ def grid_search(
     n = int(np.prod(counts))
     batch_size = min(check_int("batch_size", batch_size), n)
     sims_per_eval = check_int("sims_per_eval", sims_per_eval)
-    key = jax.random.PRNGKey(0)  # unused by the grid
-    return _run_batches(loss, key, lo, hi, counts, n, batch_size, sims_per_eval, "grid search")
+    axes = jnp.asarray(grid_axes(np.asarray(lo), np.asarray(hi), counts))
+    return _run_batches(loss, axes, lo, hi, counts, n, batch_size, sims_per_eval, "grid search")
