@@ -336,8 +336,10 @@ def tune(
         since_improve=jnp.zeros((n_starts,), jnp.int32),
         step=jnp.zeros((n_starts,), jnp.int32),
     )
+    carry = jax.tree_util.tree_map(lambda a: jnp.array(a, dtype=a.dtype), carry)  # strong types: one compile
     t0 = time.perf_counter()
-    step_fn = jax.jit(jax.vmap(step_one)).lower(carry).compile()
+    step_fn = jax.jit(jax.vmap(step_one))
+    step_fn.lower(carry).compile()  # cached by jit for the loop below
     compile_s = time.perf_counter() - t0
 
     rec: dict[str, list] = {k: [] for k in ("f", "g", "v", "best", "sims", "wall")}

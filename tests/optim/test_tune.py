@@ -161,3 +161,29 @@ def test_robust_objectives_reach_their_known_minimisers():
     assert res_mean.n_sims == 800 * 4
     res_worst = tune(robust_loss(per_sample, s, worst_case), jnp.zeros(1), optimizer=opt, steps=800)
     assert float(res_worst.params[0]) == pytest.approx(3.5, abs=2e-3)  # the midrange
+
+
+def test_each_run_compiles_its_step_once():
+    """Stable carry types: the jitted step must not recompile after the first step (it did once,
+    when a weak-typed optimiser-state leaf turned strong; that cost seconds per run)."""
+    import logging
+
+    from optim.pso import pso
+
+    messages = []
+
+    class Collect(logging.Handler):
+        def emit(self, record):
+            messages.append(record.getMessage())
+
+    handler = Collect()
+    logging.getLogger("jax").addHandler(handler)
+    try:
+        f = lambda x: jnp.sum((x - 1.0) ** 2)  # noqa: E731
+        with jax.log_compiles():
+            tune(f, jnp.zeros(2), optimizer=optax.lbfgs(), steps=6, n_starts=2)
+            pso(f, -np.ones(2), np.ones(2), n_particles=8, n_iters=30)
+    finally:
+        logging.getLogger("jax").removeHandler(handler)
+    compiles = [m for m in messages if m.startswith("Compiling jit(step_one)") or m.startswith("Compiling jit(_jitted_steps)")]
+    assert len(compiles) == 2, compiles
