@@ -100,6 +100,7 @@ def _vmax(cfg: PSOConfig, lo: jax.Array, hi: jax.Array) -> jax.Array:
     return frac * (hi - lo)
 
 
+@functools.partial(jax.jit, static_argnames="cfg")
 def pso_init(key: jax.Array, lo: jax.Array, hi: jax.Array, cfg: PSOConfig) -> SwarmState:
     """A swarm spread uniformly over the box ``[lo, hi]`` (``(d,)`` each)."""
     k_pos, k_vel, k_run = jax.random.split(key, 3)
@@ -209,11 +210,10 @@ def pso(
     sims_per_eval = check_int("sims_per_eval", sims_per_eval)
     if not callable(loss):
         raise ValueError(f"loss: must be callable, got {type(loss).__name__}")
-    key = jax.random.PRNGKey(0) if key is None else key
-    state = pso_init(key, lo, hi, cfg)
     chunk = _chunk_size(cfg.n_iters, check_int("iters_per_call", iters_per_call))
     static = dict(loss=loss, batched=batched, cfg=cfg, chunk=chunk)
     t0 = time.perf_counter()
+    state = pso_init(jax.random.PRNGKey(0) if key is None else key, lo, hi, cfg)
     _jitted_steps.lower(state, lo, hi, **static).compile()  # cached by jit for the loop below
     compile_s = time.perf_counter() - t0
     best, wall = np.empty(cfg.n_iters), np.empty(cfg.n_iters)

@@ -23,7 +23,7 @@ class SearchHistory(NamedTuple):
 
 class SearchResult(NamedTuple):
     """Outcome of a search: best point ``x`` ``(d,)``, its ``loss``, the history, simulations used,
-    seconds of searching (compile excluded, reported as ``compile_s``) and a message."""
+    seconds of searching (setup and compilation excluded, reported as ``compile_s``), a message."""
 
     x: Any
     loss: float
