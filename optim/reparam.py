@@ -252,9 +252,9 @@ class SPDMatrix(Reparam):
 class Simplex(Reparam):
     """Point of the probability simplex: ``x`` ``(n,)``, ``x > 0``, ``Σx = 1``.
 
-    Default: ``u`` ``(n−1,)``, ``x = softmax([u, 0])`` (a bijection; ``inverse`` gives
-    ``u_i = log x_i − log x_n``).  ``full=True``: ``u`` ``(n,)``, ``x = softmax(u)`` (invariant to a
-    shift of ``u``; ``inverse`` returns the zero-mean representative).
+    ``forward`` takes ``u`` of shape ``(n−1,)``: ``x = softmax([u, 0])`` (a bijection), or ``(n,)``:
+    ``x = softmax(u)`` (invariant to a shift of ``u``).  ``inverse`` returns the ``(n−1,)`` form
+    ``u_i = log x_i − log x_n`` by default, the zero-mean ``(n,)`` form with ``full=True``.
     """
 
     n: int = static_field()
@@ -266,10 +266,9 @@ class Simplex(Reparam):
 
     def forward(self, u: jax.Array) -> jax.Array:
         u = jnp.asarray(u)
-        want = self.n if self.full else self.n - 1
-        if u.shape[-1] != want:
-            raise ValueError(f"u: Simplex({self.n}, full={self.full}) needs {want} entries, got shape {u.shape}")
-        if not self.full:
+        if u.ndim == 0 or u.shape[-1] not in (self.n - 1, self.n):
+            raise ValueError(f"u: Simplex({self.n}) needs {self.n - 1} or {self.n} entries, got shape {u.shape}")
+        if u.shape[-1] == self.n - 1:
             u = jnp.concatenate([u, jnp.zeros(u.shape[:-1] + (1,), u.dtype)], axis=-1)
         return jax.nn.softmax(u, axis=-1)
 

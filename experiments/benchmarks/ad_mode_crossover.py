@@ -9,10 +9,11 @@ simulation itself costs the same for every ``p``.  Timed (jitted, median of repe
 * reverse: ``jax.value_and_grad(loss)``;
 * forward: ``jax.jacfwd`` with the value as auxiliary output (one pass of ``p`` tangents).
 
-The three take turns in every timing round and each sample averages enough calls to last 20 ms,
-so load from other processes on a shared machine hits them alike; medians over rounds are printed.
+The three take turns in every timing round and each sample averages enough calls to last 10 ms,
+so load from other processes on a shared machine hits them alike; the median and the minimum over
+rounds are printed (on a loaded machine the minimum is the less contaminated estimate).
 
-The crossover — the largest ``p`` at which forward mode is still faster — sets
+The crossover — the parameter count from which reverse mode stays faster — sets
 ``optim.tune.FORWARD_MODE_MAX_PARAMS`` (what ``mode="auto"`` uses).
 
 Usage: ``python -m experiments.benchmarks.ad_mode_crossover [--repeats 7] [--json out.json]``
@@ -77,9 +78,9 @@ def _sample(fn, x, number: int) -> float:
     return (time.perf_counter() - t0) / number
 
 
-def interleaved_medians(fns: dict, x, repeats: int, min_sample_s: float = 0.02) -> dict[str, float]:
-    """Median seconds per call of each function; the functions take turns in every round, and each
-    sample averages enough calls to last ``min_sample_s`` (so load spikes hit all of them alike)."""
+def interleaved_times(fns: dict, x, repeats: int, min_sample_s: float = 0.01) -> dict[str, tuple[float, float]]:
+    """``(median, min)`` seconds per call of each function over ``repeats`` rounds; the functions
+    take turns in every round and each sample averages enough calls to last ``min_sample_s``."""
     numbers = {}
     for name, fn in fns.items():
         jax.block_until_ready(fn(x))
@@ -89,21 +90,23 @@ def interleaved_medians(fns: dict, x, repeats: int, min_sample_s: float = 0.02) 
     for _ in range(repeats):
         for name, fn in fns.items():
             samples[name].append(_sample(fn, x, numbers[name]))
-    return {name: statistics.median(v) for name, v in samples.items()}
+    return {name: (statistics.median(v), min(v)) for name, v in samples.items()}
 
 
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--segments", type=int, nargs="+", default=[1, 2, 4, 6, 8, 12, 16, 32, 64, 128])
+    ap.add_argument("--segments", type=int, nargs="+", default=[1, 2, 4, 6, 8, 10, 12, 16, 24, 32, 64])
     ap.add_argument("--t-final", type=float, default=3.0)
-    ap.add_argument("--repeats", type=int, default=15)
+    ap.add_argument("--repeats", type=int, default=25)
     ap.add_argument("--json", default=None)
     args = ap.parse_args(argv)
     problem = PIDTuning(t_final=args.t_final)
     rows = []
     print(f"closed-loop PID loss, {problem.n_ticks} ticks × {problem.substeps} RK4 substeps; "
           f"median of {args.repeats}; devices {jax.devices()}")
-    print(f"{'params':>6} {'loss ms':>8} {'reverse ms':>10} {'forward ms':>10} {'rev/fwd':>8}")
+    print(f"{'':>6} {'median':>38} | {'minimum':>28}")
+    print(f"{'params':>6} {'loss ms':>8} {'reverse ms':>10} {'forward ms':>10} {'rev/fwd':>8} "
+          f"{'reverse ms':>10} {'forward ms':>10} {'rev/fwd':>8}")
     for n_seg in args.segments:
         loss = scheduled_loss(problem, n_seg)
         x = jnp.tile(jnp.array([[6.0], [6.0], [0.3]]), (1, n_seg)).ravel()
@@ -112,18 +115,30 @@ def main(argv=None) -> dict:
         fwd = jax.jit(jax.jacfwd(lambda v: (loss(v), loss(v)), has_aux=True))
         g_r, g_f = rev(x)[1], fwd(x)[0]
         err = float(jnp.max(jnp.abs(g_r - g_f)) / jnp.max(jnp.abs(g_r)))
-        t = interleaved_medians({"loss": plain, "reverse": rev, "forward": fwd}, x, args.repeats)
-        row = {"params": 3 * n_seg, "loss_s": t["loss"], "reverse_s": t["reverse"],
-               "forward_s": t["forward"], "grad_rel_diff": err}
+        t = interleaved_times({"loss": plain, "reverse": rev, "forward": fwd}, x, args.repeats)
+        row = {"params": 3 * n_seg, "grad_rel_diff": err}
+        for name, (med, best) in t.items():
+            row[f"{name}_s"], row[f"{name}_min_s"] = med, best
         row["reverse_over_forward"] = row["reverse_s"] / row["forward_s"]
+        row["reverse_over_forward_min"] = row["reverse_min_s"] / row["forward_min_s"]
         rows.append(row)
         print(f"{row['params']:>6} {1e3 * row['loss_s']:>8.3f} {1e3 * row['reverse_s']:>10.3f} "
-              f"{1e3 * row['forward_s']:>10.3f} {row['reverse_over_forward']:>8.2f}")
-    faster = [r["params"] for r in rows if r["forward_s"] < r["reverse_s"]]
-    crossover = max(faster) if faster else 0
-    print(f"forward mode faster up to {crossover} parameters (largest tested where it wins); "
+              f"{1e3 * row['forward_s']:>10.3f} {row['reverse_over_forward']:>8.2f} "
+              f"{1e3 * row['reverse_min_s']:>10.3f} {1e3 * row['forward_min_s']:>10.3f} "
+              f"{row['reverse_over_forward_min']:>8.2f}")
+
+    def crossover(key: str) -> int:
+        """Smallest tested p from which reverse mode stays faster (forward wins everywhere below)."""
+        for r in rows:
+            if all(q["reverse_over_forward" + key] < 1 for q in rows if q["params"] >= r["params"]):
+                return r["params"]
+        return rows[-1]["params"] * 2
+
+    cross_med, cross_min = crossover(""), crossover("_min")
+    print(f"reverse mode stays faster from {cross_med} parameters on (medians), from {cross_min} (minima); "
           f"optim.tune.FORWARD_MODE_MAX_PARAMS = {FORWARD_MODE_MAX_PARAMS}")
-    out = {"rows": rows, "crossover_params": crossover, "n_ticks": problem.n_ticks}
+    out = {"rows": rows, "reverse_faster_from_params_median": cross_med,
+           "reverse_faster_from_params_min": cross_min, "n_ticks": problem.n_ticks}
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(out, fh, indent=2)

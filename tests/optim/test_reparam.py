@@ -149,6 +149,10 @@ def test_simplex_bijection_matches_closed_form():
     u = jnp.array([0.5, -1.0])
     e = np.exp([0.5, -1.0, 0.0])
     np.testing.assert_allclose(Simplex(3).forward(u), e / e.sum(), rtol=1e-14)
+    # the (n,) form is softmax(u) itself, shift-invariant
+    np.testing.assert_allclose(Simplex(3).forward(jnp.array([1.5, 0.0, 1.0])), e / e.sum(), rtol=1e-14)
+    with pytest.raises(ValueError, match="u"):
+        Simplex(3).forward(jnp.ones(4))
 
 
 def test_apply_invert_over_pytrees_with_prefixes_and_none():
