@@ -72,7 +72,8 @@ ASSUMPTIONS = {
     "loss": assumption("∫ e² + ρ u² dt, ρ = 0.01, unit step, 3 s",
                        "the paper gives no tuning criterion for its linear PID; a smooth ISE with a "
                        "control-effort term has a finite interior optimum, so IPOPT is well posed"),
-    "controller_period": assumption(0.01, "a 100 Hz digital PID; the paper simulates at 1e-3 without a stated controller rate"),
+    "controller_period": assumption(
+        0.01, "a 100 Hz digital PID; the paper simulates at 1e-3 without a stated controller rate"),
     "derivative_filter": assumption(0.05, "the paper's PD has no stated filter (as in linear_pid_accuracy)"),
     "gain_box": assumption("kp, ki ∈ [0, 20], kd ∈ [0, 2]", "wide enough to hold the optimum well inside"),
     "budget": assumption(3200, "simulations per tuner; equal for all but IPOPT, which stops at its tolerance"),
@@ -190,7 +191,8 @@ def _responses(problem: PIDTuning, comp) -> tuple[Any, list[dict[str, Any]]]:
 
 STUDY = Study(
     name="pid_tuning_comparison",
-    description="PID of the fuzzy-PID paper's static plant tuned by gradient / PSO / random / grid / IPOPT on equal budgets",
+    description="PID of the fuzzy-PID paper's static plant tuned by gradient / PSO / random / grid / IPOPT "
+                "on equal budgets",
     config_cls=Config,
     run=run,
 )

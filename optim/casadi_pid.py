@@ -136,7 +136,8 @@ def ipopt_tune(
     record = _Record()
     opts = {
         "ipopt.max_iter": int(max_iter), "ipopt.tol": float(tol), "ipopt.print_level": int(print_level),
-        "ipopt.hessian_approximation": hessian, "ipopt.sb": "yes", "print_time": False, "iteration_callback": record,
+        "ipopt.hessian_approximation": hessian, "ipopt.sb": "yes", "print_time": False,
+        "iteration_callback": record,
     }
     solver = ca.nlpsol("ipopt", "ipopt", {"x": gsym, "f": f(gsym)}, opts)
     compile_s = time.perf_counter() - t0

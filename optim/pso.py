@@ -65,7 +65,8 @@ class PSOConfig:
             if not np.isfinite(v) or v < 0:
                 raise ValueError(f"{name}: must be finite and non-negative, got {v!r}")
         if self.velocity_clamp is not None and not (np.isfinite(self.velocity_clamp) and self.velocity_clamp > 0):
-            raise ValueError(f"velocity_clamp: must be positive (a fraction of hi − lo) or None, got {self.velocity_clamp!r}")
+            raise ValueError("velocity_clamp: must be positive (a fraction of hi − lo) or None, "
+                             f"got {self.velocity_clamp!r}")
         inertia = self.inertia
         if isinstance(inertia, tuple):
             if len(inertia) != 2 or not all(np.isfinite(v) for v in inertia):

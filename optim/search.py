@@ -118,7 +118,8 @@ def grid_search(
     """Best point of the full factorial grid over ``[lo, hi]``; ``points_per_dim`` int or ``(d,)``."""
     lo, hi = as_box(lo, hi)
     d = lo.shape[0]
-    ppd = np.broadcast_to(np.asarray(points_per_dim), (d,)) if np.ndim(points_per_dim) == 0 else np.asarray(points_per_dim)
+    ppd = np.asarray(points_per_dim)
+    ppd = np.broadcast_to(ppd, (d,)) if ppd.ndim == 0 else ppd
     if ppd.shape != (d,):
         raise ValueError(f"points_per_dim: need an int or {d} ints, got {points_per_dim!r}")
     for i, c in enumerate(ppd):

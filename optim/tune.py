@@ -46,6 +46,7 @@ from jax.flatten_util import ravel_pytree
 
 from jaxsim.core.validation import check_finite
 from optim.reparam import apply, check_domain, invert
+from optim.results import check_int
 
 FORWARD_MODE_MAX_PARAMS = 32
 """``mode="auto"`` uses forward mode up to this many unconstrained parameters.
@@ -147,21 +148,202 @@ def _tree_where(c: jax.Array, a: Any, b: Any) -> Any:
     return jax.tree_util.tree_map(lambda x, y: jnp.where(c, x, y), a, b)
 
 
-def _check_int(name: str, value: Any, minimum: int = 1) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise ValueError(f"{name}: must be an integer ≥ {minimum}, got {value!r}")
-    return int(value)
-
-
-def _check_number(name: str, value: Any, *, positive: bool = True, allow_zero: bool = False) -> float:
+def _check_number(name: str, value: Any, *, allow_zero: bool = False) -> float:
+    """Require a finite positive (or non-negative) number; return it as ``float``."""
     try:
         v = float(value)
     except (TypeError, ValueError):
         raise ValueError(f"{name}: must be a number, got {value!r}") from None
-    if not np.isfinite(v) or (positive and (v < 0 if allow_zero else v <= 0)):
+    if not np.isfinite(v) or (v < 0 if allow_zero else v <= 0):
         rel = "non-negative" if allow_zero else "positive"
         raise ValueError(f"{name}: must be finite and {rel}, got {value!r}")
     return v
+
+
+class _Settings(NamedTuple):
+    """Validated static settings of one run."""
+
+    w: float
+    tol: float
+    rtol: float
+    gtol: float
+    patience: int | None
+    multiplier_every: int
+    al: bool
+    use_forward: bool
+    sims_per_eval: int
+
+
+def _make_objective(loss: Callable, reparam: Any, constraints: Callable | None, cfg: _Settings):
+    """``objective(u, lam) -> (J, (f, g, violation, merit))`` in unconstrained space."""
+
+    def objective(u: Any, lam: jax.Array):
+        x = apply(reparam, u)
+        f = jnp.asarray(loss(x))
+        if f.shape != ():
+            raise ValueError(f"loss: must return a scalar, got shape {f.shape}")
+        g = jnp.zeros((0,), f.dtype) if constraints is None else jnp.ravel(jnp.asarray(constraints(x), f.dtype))
+        pos = jnp.maximum(g, 0.0)
+        merit = f + 0.5 * cfg.w * jnp.sum(pos**2)
+        if cfg.al:
+            j = f + jnp.sum(jnp.maximum(lam + cfg.w * g, 0.0) ** 2 - lam**2) / (2 * cfg.w)
+        else:
+            j = merit
+        return j, (f, g, jnp.sum(pos), merit)
+
+    return objective
+
+
+def _make_value_and_grad(objective: Callable, use_forward: bool):
+    """``(J, aux), grad`` by reverse mode, or by ``jacfwd`` over the flattened ``u``."""
+
+    def value_and_grad(u: Any, lam: jax.Array):
+        if not use_forward:
+            return jax.value_and_grad(objective, has_aux=True)(u, lam)
+        flat, unravel = ravel_pytree(u)
+
+        def value_twice(v: jax.Array):
+            j, aux = objective(unravel(v), lam)
+            return j, (j, aux)
+
+        grad_flat, (j, aux) = jax.jacfwd(value_twice, has_aux=True)(flat)
+        return (j, aux), unravel(grad_flat)
+
+    return value_and_grad
+
+
+def _make_step(objective: Callable, opt: optax.GradientTransformation, reparam: Any, cfg: _Settings):
+    """One tuner step for one start: evaluate, keep the best point, update, stop rules."""
+    value_and_grad = _make_value_and_grad(objective, cfg.use_forward)
+    extra_args = isinstance(opt, optax.GradientTransformationExtraArgs)
+
+    def tuner_step(c: _Carry) -> tuple[_Carry, _Out]:
+        (j, (f, g, viol, merit)), grad = value_and_grad(c.u, c.lam)
+        gnorm = optax.tree.norm(grad)
+        finite = jnp.isfinite(j) & jnp.isfinite(f) & jnp.isfinite(gnorm)
+        running = c.alive & c.active
+        better, improved = _ranking(f, viol, merit, c.best_f, c.best_v, c.best_m, cfg.tol, cfg.rtol, cfg.al)
+        keep = running & finite & better
+        if extra_args:
+            updates, new_state = opt.update(grad, c.opt_state, c.u, value=j, grad=grad,
+                                            value_fn=lambda uu: objective(uu, c.lam)[0])
+        else:
+            updates, new_state = opt.update(grad, c.opt_state, c.u)
+        move = running & finite
+        lam = c.lam
+        if cfg.al:
+            due = (c.step + 1) % cfg.multiplier_every == 0
+            lam = jnp.where(move & due, jnp.maximum(lam + cfg.w * g, 0.0), lam)
+        since = jnp.where(keep & improved, 0, c.since_improve + 1)
+        active = c.active & ~(gnorm <= cfg.gtol)
+        if cfg.patience is not None:
+            active = active & (since < cfg.patience)
+        trials = optax.tree_utils.tree_get(new_state, "num_linesearch_steps", None) if extra_args else None
+        evals = 1 + (jnp.asarray(trials) if trials is not None else 0)
+        new = _Carry(
+            u=_tree_where(move, optax.apply_updates(c.u, updates), c.u),
+            opt_state=_tree_where(move, new_state, c.opt_state),
+            lam=lam,
+            best_u=_tree_where(keep, c.u, c.best_u),
+            best_f=jnp.where(keep, f, c.best_f),
+            best_v=jnp.where(keep, viol, c.best_v),
+            best_m=jnp.where(keep, merit, c.best_m),
+            best_step=jnp.where(keep, c.step, c.best_step),
+            alive=c.alive & (finite | ~running),
+            active=active,
+            since_improve=since,
+            step=c.step + 1,
+        )
+        new = jax.tree_util.tree_map(lambda a, b: a.astype(b.dtype), new, c)  # fixed avals: one compile
+        return new, _Out(f, gnorm, viol, finite, running, jnp.where(running, evals, 0), apply(reparam, c.u))
+
+    return tuner_step
+
+
+def _initial_carry(key: jax.Array, u0: Any, opt: optax.GradientTransformation, n_starts: int,
+                   spread: float, m_constraints: int) -> _Carry:
+    """Start 0 is ``u0``, the others ``u0 + spread·N(0, 1)``; strong dtypes so the step compiles once."""
+    v0, unravel = ravel_pytree(u0)
+    noise = spread * jax.random.normal(key, (n_starts, v0.size), v0.dtype)
+    u_starts = jax.vmap(unravel)(v0[None, :] + noise.at[0].set(0.0))
+    inf = jnp.full((n_starts,), jnp.inf, v0.dtype)
+    carry = _Carry(
+        u=u_starts,
+        opt_state=jax.vmap(opt.init)(u_starts),
+        lam=jnp.zeros((n_starts, m_constraints), v0.dtype),
+        best_u=u_starts,
+        best_f=inf, best_v=inf, best_m=inf,
+        best_step=jnp.full((n_starts,), -1, jnp.int32),
+        alive=jnp.ones((n_starts,), bool),
+        active=jnp.ones((n_starts,), bool),
+        since_improve=jnp.zeros((n_starts,), jnp.int32),
+        step=jnp.zeros((n_starts,), jnp.int32),
+    )
+    return jax.tree_util.tree_map(lambda a: jnp.array(a, dtype=a.dtype), carry)
+
+
+class _Records(NamedTuple):
+    f: list
+    grad_norm: list
+    violation: list
+    best: list
+    sims: list
+    wall: list
+
+
+def _run_steps(step_fn: Callable, carry: _Carry, steps: int, cfg: _Settings,
+               callback: Callable | None) -> tuple[_Carry, _Records, str]:
+    """The host loop: one jitted step per iteration, records, callback and stopping."""
+    rec = _Records([], [], [], [], [], [])
+    sims, reason = 0, f"completed {steps} steps"
+    start = time.perf_counter()
+    for k in range(steps):
+        carry, out = step_fn(carry)
+        host = jax.device_get(out._replace(x=None))
+        sims += int(np.sum(host.evals)) * cfg.sims_per_eval
+        rec.f.append(host.f)
+        rec.grad_norm.append(host.grad_norm)
+        rec.violation.append(host.violation)
+        rec.best.append(_best_index_and_loss(carry, cfg.tol, cfg.al)[1])
+        rec.sims.append(sims)
+        rec.wall.append(time.perf_counter() - start)
+        f_now = np.where(host.ran & host.finite, host.f, np.inf)
+        if callback is not None and np.any(np.isfinite(f_now)):
+            i = int(np.argmin(f_now))
+            if callback(k, jax.tree_util.tree_map(lambda a: a[i], out.x), float(f_now[i])):
+                return carry, rec, f"stopped by callback at step {k}"
+        alive, active = np.asarray(carry.alive), np.asarray(carry.active)
+        if not np.any(alive & active):
+            if not np.all(alive):
+                reason = f"stopped at step {k}: every start stopped"
+            else:
+                reason = (f"early stop at step {k}: converged (patience={cfg.patience}, "
+                          f"rtol={cfg.rtol:g}, gtol={cfg.gtol:g})")
+            break
+    return carry, rec, reason
+
+
+def _history(rec: _Records) -> History:
+    f_hist, g_hist = np.stack(rec.f), np.stack(rec.grad_norm)
+    f_masked = np.where(np.isfinite(f_hist), f_hist, np.inf)
+    rows, pick = np.arange(len(rec.f)), np.argmin(f_masked, axis=1)
+    return History(
+        loss=f_masked[rows, pick], best_loss=np.asarray(rec.best, float), grad_norm=g_hist[rows, pick],
+        sims=np.asarray(rec.sims), wall_s=np.asarray(rec.wall), loss_per_start=f_hist,
+        grad_norm_per_start=g_hist, violation_per_start=np.stack(rec.violation),
+    )
+
+
+def _non_finite_note(carry: _Carry, history: History, idx: int, best_loss: float) -> str:
+    """'' when every start stayed finite; otherwise which starts broke, when, and what was kept."""
+    dead = np.flatnonzero(~np.asarray(carry.alive))
+    if not dead.size:
+        return ""
+    bad = ~np.isfinite(history.loss_per_start) | ~np.isfinite(history.grad_norm_per_start)
+    first_bad = [int(np.argmax(bad[:, i])) for i in dead]
+    return (f"; the loss or its gradient was non-finite (NaN/inf) in start(s) {dead.tolist()} at "
+            f"step(s) {first_bad}; kept the best finite point (start {idx}, step "
+            f"{int(np.asarray(carry.best_step)[idx])}, loss {best_loss:.6g})")
 
 
 def tune(
@@ -211,19 +393,14 @@ def tune(
     """
     if not callable(loss):
         raise ValueError(f"loss: must be callable, got {type(loss).__name__}")
-    steps = _check_int("steps", steps)
-    n_starts = _check_int("n_starts", n_starts)
-    sims_per_eval = _check_int("sims_per_eval", sims_per_eval)
-    multiplier_every = _check_int("multiplier_every", multiplier_every)
+    steps = check_int("steps", steps)
+    n_starts = check_int("n_starts", n_starts)
     if patience is not None:
-        patience = _check_int("patience", patience)
-    w = _check_number("penalty_weight", penalty_weight)
-    rtol = _check_number("rtol", rtol, allow_zero=True)
-    gtol = _check_number("gtol", gtol, allow_zero=True)
-    tol = _check_number("constraint_tol", constraint_tol, allow_zero=True)
+        patience = check_int("patience", patience)
     spread = _check_number("init_spread", init_spread, allow_zero=True)
     if constraint_method not in ("penalty", "augmented_lagrangian"):
-        raise ValueError(f"constraint_method: must be 'penalty' or 'augmented_lagrangian', got {constraint_method!r}")
+        raise ValueError("constraint_method: must be 'penalty' or 'augmented_lagrangian', "
+                         f"got {constraint_method!r}")
     if mode not in ("auto", "forward", "reverse"):
         raise ValueError(f"mode: must be 'auto', 'forward' or 'reverse', got {mode!r}")
     if callback is not None and not callable(callback):
@@ -231,194 +408,60 @@ def tune(
     opt = optax.adam(1e-2) if optimizer is None else optimizer
     if not (hasattr(opt, "init") and hasattr(opt, "update")):
         raise ValueError(f"optimizer: must be an optax.GradientTransformation, got {type(opt).__name__}")
-    leaves = jax.tree_util.tree_leaves(params0)
-    if not leaves:
+    if not jax.tree_util.tree_leaves(params0):
         raise ValueError("params0: must contain at least one array")
     params0 = jax.tree_util.tree_map(lambda a: jnp.asarray(a, dtype=jnp.result_type(a, float)), params0)
     check_finite("params0", params0)
     check_domain(reparam, params0, "params0")
     u0 = invert(reparam, params0)
     check_finite("params0 (in unconstrained space)", u0)
-
-    v0, unravel = ravel_pytree(u0)
-    n_params = int(v0.size)
-    use_forward = mode == "forward" or (mode == "auto" and n_params <= FORWARD_MODE_MAX_PARAMS)
-    al = constraints is not None and constraint_method == "augmented_lagrangian"
-    extra_args = isinstance(opt, optax.GradientTransformationExtraArgs)
-
-    def objective(u: Any, lam: jax.Array):
-        x = apply(reparam, u)
-        f = jnp.asarray(loss(x))
-        if f.shape != ():
-            raise ValueError(f"loss: must return a scalar, got shape {f.shape}")
-        if constraints is None:
-            g = jnp.zeros((0,), f.dtype)
-        else:
-            g = jnp.ravel(jnp.asarray(constraints(x), f.dtype))
-        pos = jnp.maximum(g, 0.0)
-        viol = jnp.sum(pos)
-        merit = f + 0.5 * w * jnp.sum(pos**2)
-        if al:
-            j = f + jnp.sum(jnp.maximum(lam + w * g, 0.0) ** 2 - lam**2) / (2 * w)
-        else:
-            j = merit
-        return j, (f, g, viol, merit)
-
-    def value_and_grad(u: Any, lam: jax.Array):
-        if not use_forward:
-            return jax.value_and_grad(objective, has_aux=True)(u, lam)
-        flat, unr = ravel_pytree(u)
-
-        def value_twice(v: jax.Array):
-            j, aux = objective(unr(v), lam)
-            return j, (j, aux)
-
-        grad_flat, (j, aux) = jax.jacfwd(value_twice, has_aux=True)(flat)
-        return (j, aux), unr(grad_flat)
-
+    n_params = int(ravel_pytree(u0)[0].size)
+    cfg = _Settings(
+        w=_check_number("penalty_weight", penalty_weight),
+        tol=_check_number("constraint_tol", constraint_tol, allow_zero=True),
+        rtol=_check_number("rtol", rtol, allow_zero=True),
+        gtol=_check_number("gtol", gtol, allow_zero=True),
+        patience=patience,
+        multiplier_every=check_int("multiplier_every", multiplier_every),
+        al=constraints is not None and constraint_method == "augmented_lagrangian",
+        use_forward=mode == "forward" or (mode == "auto" and n_params <= FORWARD_MODE_MAX_PARAMS),
+        sims_per_eval=check_int("sims_per_eval", sims_per_eval),
+    )
     m_constraints = 0
     if constraints is not None:
-        g_shape = jax.eval_shape(lambda u: jnp.ravel(jnp.asarray(constraints(apply(reparam, u)))), u0).shape
-        m_constraints = int(np.prod(g_shape))
+        g = jax.eval_shape(lambda u: jnp.ravel(jnp.asarray(constraints(apply(reparam, u)))), u0)
+        m_constraints = int(np.prod(g.shape))
 
-    def step_one(c: _Carry):
-        (j, (f, g, viol, merit)), grad = value_and_grad(c.u, c.lam)
-        gnorm = optax.tree.norm(grad)
-        finite = jnp.isfinite(j) & jnp.isfinite(f) & jnp.isfinite(gnorm)
-        running = c.alive & c.active
-        better, improved = _ranking(f, viol, merit, c.best_f, c.best_v, c.best_m, tol, rtol, al)
-        keep = running & finite & better
-        if extra_args:
-            updates, new_state = opt.update(grad, c.opt_state, c.u, value=j, grad=grad,
-                                            value_fn=lambda uu: objective(uu, c.lam)[0])
-        else:
-            updates, new_state = opt.update(grad, c.opt_state, c.u)
-        move = running & finite
-        u_next = _tree_where(move, optax.apply_updates(c.u, updates), c.u)
-        lam = c.lam
-        if al:
-            due = (c.step + 1) % multiplier_every == 0
-            lam = jnp.where(move & due, jnp.maximum(lam + w * g, 0.0), lam)
-        since = jnp.where(keep & improved, 0, c.since_improve + 1)
-        active = c.active & ~(gnorm <= gtol)
-        if patience is not None:
-            active = active & (since < patience)
-        ls = optax.tree_utils.tree_get(new_state, "num_linesearch_steps", None) if extra_args else None
-        evals = 1 + (jnp.asarray(ls) if ls is not None else 0)
-        carry = _Carry(
-            u=u_next,
-            opt_state=_tree_where(move, new_state, c.opt_state),
-            lam=lam,
-            best_u=_tree_where(keep, c.u, c.best_u),
-            best_f=jnp.where(keep, f, c.best_f),
-            best_v=jnp.where(keep, viol, c.best_v),
-            best_m=jnp.where(keep, merit, c.best_m),
-            best_step=jnp.where(keep, c.step, c.best_step),
-            alive=c.alive & (finite | ~running),
-            active=active,
-            since_improve=since,
-            step=c.step + 1,
-        )
-        carry = jax.tree_util.tree_map(lambda new, old: new.astype(old.dtype), carry, c)  # fixed avals
-        out = _Out(f, gnorm, viol, finite, running, jnp.where(running, evals, 0), apply(reparam, c.u))
-        return carry, out
-
-    def initial_carry(key: jax.Array) -> _Carry:
-        """Start 0 is u0, the others u0 + init_spread·N(0, 1); strong dtypes so the step compiles once."""
-        noise = spread * jax.random.normal(key, (n_starts, n_params), v0.dtype)
-        u_starts = jax.vmap(unravel)(v0[None, :] + noise.at[0].set(0.0))
-        inf = jnp.full((n_starts,), jnp.inf, v0.dtype)
-        carry = _Carry(
-            u=u_starts,
-            opt_state=jax.vmap(opt.init)(u_starts),
-            lam=jnp.zeros((n_starts, m_constraints), v0.dtype),
-            best_u=u_starts,
-            best_f=inf, best_v=inf, best_m=inf,
-            best_step=jnp.full((n_starts,), -1, jnp.int32),
-            alive=jnp.ones((n_starts,), bool),
-            active=jnp.ones((n_starts,), bool),
-            since_improve=jnp.zeros((n_starts,), jnp.int32),
-            step=jnp.zeros((n_starts,), jnp.int32),
-        )
-        return jax.tree_util.tree_map(lambda a: jnp.array(a, dtype=a.dtype), carry)
-
+    objective = _make_objective(loss, reparam, constraints, cfg)
     t0 = time.perf_counter()
-    carry = jax.jit(initial_carry)(jax.random.PRNGKey(0) if key is None else key)
-    step_fn = jax.jit(jax.vmap(step_one))
+    carry = jax.jit(_initial_carry, static_argnums=(2, 3, 4, 5))(
+        jax.random.PRNGKey(0) if key is None else key, u0, opt, n_starts, spread, m_constraints)
+    step_fn = jax.jit(jax.vmap(_make_step(objective, opt, reparam, cfg)))
     step_fn.lower(carry).compile()  # cached by jit for the loop below
     compile_s = time.perf_counter() - t0
 
-    rec: dict[str, list] = {k: [] for k in ("f", "g", "v", "best", "sims", "wall")}
-    sims, reason = 0, f"completed {steps} steps"
-    start = time.perf_counter()
-    for k in range(steps):
-        carry, out = step_fn(carry)
-        out_h = jax.device_get(out._replace(x=None))
-        sims += int(np.sum(out_h.evals)) * sims_per_eval
-        f_now = np.where(out_h.ran & out_h.finite, out_h.f, np.inf)
-        rec["f"].append(out_h.f)
-        rec["g"].append(out_h.grad_norm)
-        rec["v"].append(out_h.violation)
-        rec["best"].append(_best_index_and_loss(carry, tol, al)[1])
-        rec["sims"].append(sims)
-        rec["wall"].append(time.perf_counter() - start)
-        if callback is not None and np.any(np.isfinite(f_now)):
-            i = int(np.argmin(f_now))
-            x_i = jax.tree_util.tree_map(lambda a: a[i], out.x)
-            if callback(k, x_i, float(f_now[i])):
-                reason = f"stopped by callback at step {k}"
-                break
-        alive, active = np.asarray(carry.alive), np.asarray(carry.active)
-        if not np.any(alive & active):
-            if not np.all(alive):
-                reason = f"stopped at step {k}: every start stopped"
-            elif patience is not None or gtol > 0:
-                reason = f"early stop at step {k}: converged (patience={patience}, rtol={rtol:g}, gtol={gtol:g})"
-            break
-    wall = time.perf_counter() - start
-    n_run = len(rec["f"])
-
-    idx, best_loss = _best_index_and_loss(carry, tol, al)
+    carry, rec, reason = _run_steps(step_fn, carry, steps, cfg, callback)
+    wall = rec.wall[-1]
+    idx, best_loss = _best_index_and_loss(carry, cfg.tol, cfg.al)
     if not np.isfinite(best_loss):
         raise ValueError("loss: non-finite (NaN/inf) at every start's first point, nothing to keep; "
-                         f"check params0 and the loss (first values {np.asarray(rec['f'][0])})")
-    dead = np.flatnonzero(~np.asarray(carry.alive))
-    message = reason
-    if dead.size:
-        first_bad = [int(np.argmax(~np.isfinite(np.asarray(rec["f"])[:, i]) |
-                                   ~np.isfinite(np.asarray(rec["g"])[:, i]))) for i in dead]
-        message = (f"{reason}; the loss or its gradient was non-finite (NaN/inf) in start(s) "
-                   f"{dead.tolist()} at step(s) {first_bad}; kept the best finite point "
-                   f"(start {idx}, step {int(np.asarray(carry.best_step)[idx])}, loss {best_loss:.6g})")
+                         f"check params0 and the loss (first values {np.asarray(rec.f[0])})")
+    history = _history(rec)
     best_u = jax.tree_util.tree_map(lambda a: a[idx], carry.best_u)
-    f_hist = np.stack(rec["f"])
-    f_masked = np.where(np.isfinite(f_hist), f_hist, np.inf)
-    pick = np.argmin(f_masked, axis=1)
-    g_hist = np.stack(rec["g"])
-    history = History(
-        loss=f_masked[np.arange(n_run), pick],
-        best_loss=np.asarray(rec["best"], float),
-        grad_norm=g_hist[np.arange(n_run), pick],
-        sims=np.asarray(rec["sims"]),
-        wall_s=np.asarray(rec["wall"]),
-        loss_per_start=f_hist,
-        grad_norm_per_start=g_hist,
-        violation_per_start=np.stack(rec["v"]),
-    )
     return TuneResult(
         params=apply(reparam, best_u),
         loss=float(best_loss),
         history=history,
-        n_sims=int(sims),
+        n_sims=int(rec.sims[-1]),
         wall_s=float(wall),
-        message=message,
+        message=reason + _non_finite_note(carry, history, idx, best_loss),
         start_index=int(idx),
         u=best_u,
         constraint_violation=float(np.asarray(carry.best_v)[idx]) if constraints is not None else 0.0,
-        multipliers=np.asarray(carry.lam[idx]) if al else None,
+        multipliers=np.asarray(carry.lam[idx]) if cfg.al else None,
         compile_s=float(compile_s),
-        n_steps=n_run,
-        mode="forward" if use_forward else "reverse",
+        n_steps=len(rec.f),
+        mode="forward" if cfg.use_forward else "reverse",
     )
 
 

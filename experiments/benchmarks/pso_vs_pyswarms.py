@@ -138,7 +138,8 @@ def main(argv=None) -> dict:
     out["ours_compile_s"] = first.compile_s
     ours, numpy_runs, jax_runs = [], [], []
     for s in range(args.repeats):  # the three take turns, so load from other processes hits them alike
-        ours.append(pso(problem.loss, lo, hi, n_particles=N_PARTICLES, n_iters=N_ITERS, key=jax.random.PRNGKey(s + 1)))
+        ours.append(pso(problem.loss, lo, hi, n_particles=N_PARTICLES, n_iters=N_ITERS,
+                        key=jax.random.PRNGKey(s + 1)))
         numpy_runs.append(run_pyswarms(numpy_objective, lo, hi, N_ITERS, s))
         jax_runs.append(run_pyswarms(jax_objective, lo, hi, N_ITERS, s))
     out["ours_s"] = statistics.median(r.wall_s for r in ours)
@@ -158,7 +159,8 @@ def main(argv=None) -> dict:
 
     print(f"PSO, {N_PARTICLES} particles × {N_ITERS} iterations on the closed-loop PID loss "
           f"({problem.n_ticks} ticks × {problem.substeps} RK4 substeps), median of {args.repeats}")
-    print(f"  ours (jit + vmap, float64):        {out['ours_s']:.3f} s  (+ compile {out['ours_compile_s']:.2f} s), "
+    print(f"  ours (jit + vmap, float64):        {out['ours_s']:.3f} s  "
+          f"(+ compile {out['ours_compile_s']:.2f} s), "
           f"best loss {out['ours_best_loss']:.6f}")
     print(f"  pyswarms + NumPy swarm loss:       {out['pyswarms_numpy_s']:.3f} s  → ratio "
           f"{out['ratio_pyswarms_numpy_over_ours']:.1f}×, best loss {out['pyswarms_numpy_best_loss']:.6f} "

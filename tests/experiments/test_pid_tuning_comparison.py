@@ -56,4 +56,5 @@ def test_budgets_are_equal_and_ipopt_is_the_optimum(study_output):
     opt = next(r for r in table if r["tuner"] == "ipopt")
     assert 0 < opt["kp"] < 20 and 0 < opt["ki"] < 20 and 0 < opt["kd"] < 2
     grad = next(r for r in table if r["tuner"] == "gradient_lbfgs")
-    np.testing.assert_allclose([grad[k] for k in ("kp", "ki", "kd")], [opt[k] for k in ("kp", "ki", "kd")], rtol=1e-5)
+    gains = ("kp", "ki", "kd")
+    np.testing.assert_allclose([grad[k] for k in gains], [opt[k] for k in gains], rtol=1e-5)

@@ -85,7 +85,8 @@ def test_ring_neighbourhood_best_against_a_loop():
     rng = np.random.default_rng(2)
     pbest, cost = rng.normal(size=(9, 2)), rng.normal(size=9)
     for k in (1, 2):
-        got = np.asarray(neighbourhood_best(jnp.asarray(pbest), jnp.asarray(cost), PSOConfig(topology="ring", neighbors=k)))
+        cfg = PSOConfig(topology="ring", neighbors=k)
+        got = np.asarray(neighbourhood_best(jnp.asarray(pbest), jnp.asarray(cost), cfg))
         for i in range(9):
             nb = [(i + o) % 9 for o in range(-k, k + 1)]
             np.testing.assert_array_equal(got[i], pbest[nb[int(np.argmin(cost[nb]))]])

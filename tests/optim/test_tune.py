@@ -185,5 +185,6 @@ def test_each_run_compiles_its_step_once():
             pso(f, -np.ones(2), np.ones(2), n_particles=8, n_iters=30)
     finally:
         logging.getLogger("jax").removeHandler(handler)
-    compiles = [m for m in messages if m.startswith("Compiling jit(step_one)") or m.startswith("Compiling jit(_jitted_steps)")]
+    names = ("Compiling jit(tuner_step)", "Compiling jit(_jitted_steps)")
+    compiles = [m for m in messages if m.startswith(names)]
     assert len(compiles) == 2, compiles
