@@ -64,8 +64,9 @@ def test_inertia_schedule_matches_pyswarms_lin_variation():
         assert float(cfg.inertia_at(i)) == pytest.approx(theirs, rel=1e-14)
 
 
-@settings(max_examples=40, deadline=None)
-@given(pos=hnp.arrays(np.float64, (6, 3), elements=st.floats(-40, 40)))
+@settings(max_examples=40, deadline=None, derandomize=True)
+# XLA's CPU backend flushes subnormals to zero, NumPy does not: draw normal floats only
+@given(pos=hnp.arrays(np.float64, (6, 3), elements=st.floats(-40, 40, allow_subnormal=False)))
 def test_bound_handling_matches_pyswarms_and_stays_inside(pos):
     from pyswarms.backend.handlers import BoundaryHandler
 

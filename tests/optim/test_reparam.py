@@ -20,7 +20,7 @@ from optim.reparam import (
     invert,
 )
 
-FAST = settings(max_examples=40, deadline=None)
+FAST = settings(max_examples=40, deadline=None, derandomize=True)  # reproducible in CI
 moderate = st.floats(-15.0, 15.0, allow_nan=False)
 
 
