@@ -39,7 +39,8 @@ class Config:
     rudder_step_time: float = 20.0  # s
     speed_step: float = 1.0  # m/s, commanded surge-speed perturbation
     speed_step_time: float = 10.0  # s
-    rank_tol: float = 1e-8
+    rank_tol: float = 1e-8  # vessel data (not exactly low-rank: the kinematics are nonlinear)
+    lti_rank_tol: float = 1e-10  # exactly low-rank LTI data
     noise_std: float = 1e-4  # m on x, y; rad on ψ
     n_noise_runs: int = 32  # quick: 8
     n_lti_systems: int = 60  # quick: 20
@@ -53,7 +54,9 @@ ASSUMPTIONS = {
     "manoeuvre": assumption(
         "rudder 15° sin(2πt/40 s) + 5° step at 20 s; +1 m/s speed command at 10 s",
         "the paper's control signals (Fig. 4) are curves only; steps and sinusoids are 'linearisable' inputs"),
-    "rank_tol": assumption(1e-8, "SVD threshold of the null space (relative to σ_max); not stated in the paper"),
+    "rank_tol": assumption(1e-8, "SVD threshold of the null space (relative to σ_max) for the vessel; not stated "
+                                 "in the paper; tighter thresholds pick up the kinematic nonlinearity (table null_space_choice)"),
+    "lti_rank_tol": assumption(1e-10, "threshold for the exactly low-rank random LTI data (the predictor's default)"),
     "noisy_rank": assumption("the noise-free numerical rank",
                              "with noise nothing is exactly null; the rank is fixed to the noise-free one"),
     "noise_std": assumption(1e-4, "the issue's level; the paper's data are noise-free"),
@@ -112,9 +115,9 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     lti_rows = []
     for i in progress(range(n_lti), desc="random LTI systems", unit="system"):
         ys, n, p = random_lti(rng, cfg.sample_period, 3 * warm)
-        pred = np.asarray(hp.predict_series(jnp.asarray(ys), cfg.window, cfg.nu, cfg.rank_tol))
+        pred = np.asarray(hp.predict_series(jnp.asarray(ys), cfg.window, cfg.nu, cfg.lti_rank_tol))
         lti_rows.append({"system": i, "order": n, "outputs": p,
-                         "hankel_rank": hp.numerical_rank(ys, cfg.window, cfg.nu, cfg.rank_tol),
+                         "hankel_rank": hp.numerical_rank(ys, cfg.window, cfg.nu, cfg.lti_rank_tol),
                          "max_abs_error": float(np.nanmax(np.abs(pred - ys)))})
 
     t, y, u = simulate_vessel(cfg, t_final)
