@@ -273,7 +273,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         st = _stats_np(cfg, s, step)
         integ_rows.append({"integration": name, "step_s": step, "horizon_s": float(s["t"][-1] + step),
                            **{f"ident_err_rel_{k}": v for k, v in st.items() if k != "scale"}})
-    rk4_err = _rk4_failure(cfg, rk4, ts, key)
+    rk4_err = _rk4_failure(cfg, rk4, ts, key, scale=_stats_np(cfg, runs[steps[0][0]][0], ts)["scale"])
     integ_rows.append({"integration": "smooth surrogate, explicit RK4", "step_s": ts, "horizon_s": 3.3,
                        "ident_err_rel_max": rk4_err})
 
@@ -343,6 +343,8 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         "nominal-friction sign of the estimated speed flips ~1 ms late; no continuous observer can follow a jump, "
         "so the paper's 0.35 % holds for the median and p99 but not for the max at those instants",
         "explicit RK4 on the smooth surrogate: eigenvalue ≈ −k3/ε = −1e7 s⁻¹, far outside its stability region",
+        "at a speed reversal the rotor sticks for ~2 ms (dry friction): the plant's exact sign(x2) chatters there "
+        "under RK4 (its Filippov average is what the observer follows), see the zoom in identification.png",
         "angle noise is differentiated twice by the observer: d̂ noise ∝ (k1/k3)·σ/dt, so 1e-8 rad already "
         "costs percent-level errors without the equivalent-injection filter",
     ]
@@ -354,11 +356,11 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
                        assumptions=ASSUMPTIONS, figures=figs, notes=notes)
 
 
-def _rk4_failure(cfg: Config, rk4: smo.SMOParams, ts: float, key) -> float:
-    """Max relative error of the smooth surrogate under explicit RK4 on [0, 3.3] s (it chatters at ±k1)."""
+def _rk4_failure(cfg: Config, rk4: smo.SMOParams, ts: float, key, scale: float) -> float:
+    """Max error (relative to ``scale``) of the smooth surrogate under explicit RK4 on [0.5, 3.3] s."""
     s = jax.jit(lambda p, k: run_once(cfg, p, sd.ServoParams(), jnp.zeros(2), k, ts, 3.3))(rk4, key)
     err = np.abs(np.asarray(s["M_hat"]) - np.asarray(s["M"]))[int(0.5 / ts):]
-    return float(np.nanmax(err) / 0.26) if np.all(np.isfinite(err)) else float("inf")
+    return float(np.nanmax(err) / scale) if np.all(np.isfinite(err)) else float("inf")
 
 
 def _plot_identification(s, ts):
