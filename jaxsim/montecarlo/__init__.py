@@ -29,6 +29,7 @@ from jaxsim.montecarlo.distributions import (
 from jaxsim.montecarlo.engine import SweepResult, as_key, monte_carlo, resolve_devices, sweep
 from jaxsim.montecarlo.events import wilson_interval
 from jaxsim.montecarlo.kernel import run_one
+from jaxsim.montecarlo.plots import plot_distribution, plot_sweep
 from jaxsim.montecarlo.moments import Moments, PairwiseMerge, block_moments, merge_moments, moments_of, pairwise_sum
 from jaxsim.montecarlo.result import EventStats, MetricStats, MonteCarloResult, RawRuns
 from jaxsim.montecarlo.sketch import QuantileSketch, quantile_error_bound, sketch_quantile
@@ -40,5 +41,5 @@ __all__ = [
     "SweepResult", "as_key", "monte_carlo", "resolve_devices", "sweep", "wilson_interval", "run_one",
     "Moments", "PairwiseMerge", "block_moments", "merge_moments", "moments_of", "pairwise_sum",
     "EventStats", "MetricStats", "MonteCarloResult", "RawRuns",
-    "QuantileSketch", "quantile_error_bound", "sketch_quantile",
+    "QuantileSketch", "quantile_error_bound", "sketch_quantile", "plot_distribution", "plot_sweep",
 ]

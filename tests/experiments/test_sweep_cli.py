@@ -106,3 +106,29 @@ def test_noisy_pid_per_run_metric_matches_a_direct_simulation():
     assert float(res["itae"].mean) == pytest.approx(ref, rel=1e-12)
     assert float(res["itae"].std) <= 1e-12 * ref
     assert np.isfinite(ref) and ref > 0
+
+
+@pytest.mark.slow
+def test_the_readme_multi_host_commands_on_loopback_match_one_device(tmp_path, one_device_rows):
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    env = {**os.environ, "JAX_COMPILATION_CACHE_DIR": str(CACHE_DIR)}
+    env["XLA_FLAGS"] = " ".join(f for f in env.get("XLA_FLAGS", "").split() if "device_count" not in f)
+    procs = [subprocess.Popen([sys.executable, "-m", "experiments", *ARGS, "--out", str(tmp_path / f"p{i}"),
+                               "--coordinator", f"127.0.0.1:{port}", "--num-processes", "2", "--process-id", str(i)],
+                              cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+             for i in range(2)]
+    try:
+        logs = [p.communicate(timeout=600) for p in procs]
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.kill()
+    assert [p.returncode for p in procs] == [0, 0], [err[-2000:] for _, err in logs]
+    res = json.loads((tmp_path / "p0" / "results.json").read_text())
+    assert res["metrics"]["processes"] == 2 and res["metrics"]["devices"] == 2
+    assert res["tables"]["sweep"] == one_device_rows
+    assert not (tmp_path / "p1").exists()  # only process 0 writes
