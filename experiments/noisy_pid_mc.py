@@ -16,7 +16,6 @@ run must give the deterministic ITAE of ``simulate`` + ``metrics.itae``.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from typing import Any, Callable
 

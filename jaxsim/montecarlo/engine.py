@@ -212,13 +212,50 @@ class _PointAccumulator:
 # ---------------------------------------------------------------------------------------------
 # the run
 
-_KERNELS: dict[Any, Callable] = {}
+
+@dataclass(frozen=True)
+class _Chunking:
+    """How ``n`` runs are cut: blocks of ``block_size`` runs, chunks of ``per_chunk`` blocks, each
+    chunk's block list padded to ``padded`` (a multiple of the device count) with id ``-1``."""
+
+    n: int
+    block_size: int
+    per_chunk: int
+    padded: int
+
+    @property
+    def n_blocks(self) -> int:
+        return math.ceil(self.n / self.block_size)
+
+    @property
+    def n_chunks(self) -> int:
+        return math.ceil(self.n_blocks / self.per_chunk)
+
+    def real_blocks(self, c: int) -> int:
+        return min(self.n_blocks, (c + 1) * self.per_chunk) - c * self.per_chunk
+
+    def runs(self, c: int) -> int:
+        first = c * self.per_chunk * self.block_size
+        return min(self.n, first + self.per_chunk * self.block_size) - first
+
+    def block_ids(self, c: int) -> np.ndarray:
+        ids = np.full(self.padded, -1, np.int64)
+        ids[: self.real_blocks(c)] = np.arange(c * self.per_chunk, c * self.per_chunk + self.real_blocks(c))
+        return ids
+
+    def meta(self, c: int) -> dict[str, int]:
+        """What a chunk file must say about itself."""
+        return {"first_block": c * self.per_chunk, "n_blocks": self.real_blocks(c)}
+
+
+_KERNELS: dict[Any, Any] = {}
 
 
 def _kernel(fn: Callable, space: Any, names: tuple[str, ...], leaves: list[Leaf], block_size: int,
             blocks: int, sketch: QuantileSketch | None, devices: list) -> tuple[Callable, Mesh]:
-    treedef = jax.tree_util.tree_structure(space, is_leaf=None)
-    cache_key = (fn, treedef, names, tuple(leaves), block_size, blocks, sketch, tuple(devices))
+    """The jitted chunk kernel and its mesh, cached per (fn, shapes, layout, devices)."""
+    cache_key = (fn, jax.tree_util.tree_structure(space), names, tuple(leaves), block_size, blocks,
+                 sketch, tuple(devices))
     try:
         hit = _KERNELS.get(cache_key)
     except TypeError:  # unhashable fn or static metadata: no caching
@@ -231,12 +268,55 @@ def _kernel(fn: Callable, space: Any, names: tuple[str, ...], leaves: list[Leaf]
     return hit
 
 
-def _silent(*_: Any, **__: Any) -> Any:
-    class _Null:
-        def update(self, *_: Any) -> None: ...
-        def close(self) -> None: ...
-        def set_postfix_str(self, *_: Any, **__: Any) -> None: ...
-    return _Null()
+class _ChunkSource:
+    """Gives every chunk's data: from the checkpoint folder when it holds a valid copy, else computed
+    (and saved).  Multi-process: process 0 alone touches the folder and broadcasts what it read."""
+
+    def __init__(self, kernel: Callable, mesh: Mesh, chunking: _Chunking, leaves: list[Leaf],
+                 sketch: QuantileSketch | None, store: ChunkStore | None, n_points: int,
+                 key_data: np.ndarray, space: Any):
+        self.kernel, self.mesh, self.chunking, self.leaves, self.sketch = kernel, mesh, chunking, leaves, sketch
+        self.store = store
+        self.multi = jax.process_count() > 1
+        self.g_key = to_global(key_data, mesh, P())
+        self.g_n = to_global(np.asarray(chunking.n, jnp.result_type(int)), mesh, P())
+        self.g_space = jax.tree_util.tree_map(lambda v: to_global(v, mesh, P()), space)
+        done = np.zeros((n_points, chunking.n_chunks), bool)
+        if store is not None:
+            for p in range(n_points):
+                for c in range(chunking.n_chunks):
+                    done[p, c] = store.load(p, c, chunking.meta(c)) is not None
+        self.done = self._broadcast(done).astype(bool) if self.multi else done
+
+    @staticmethod
+    def _broadcast(tree: Any) -> Any:
+        from jax.experimental import multihost_utils
+
+        return jax.tree_util.tree_map(np.asarray, multihost_utils.broadcast_one_to_all(tree))
+
+    def stored(self, p: int, c: int) -> dict[str, np.ndarray] | None:
+        if not self.done[p, c]:
+            return None
+        chunk = self.store.load(p, c, self.chunking.meta(c)) if self.store is not None else None
+        if self.multi:  # everyone gets process 0's copy (or learns it must be computed after all)
+            template = _template(self.leaves, self.chunking.real_blocks(c), self.sketch)
+            ok, data = self._broadcast((np.int32(chunk is not None), chunk if chunk is not None else template))
+            chunk = data if int(ok) else None
+        return chunk
+
+    def compute(self, p: int, c: int, g_point: dict[str, jax.Array]) -> dict[str, np.ndarray]:
+        g_ids = to_global(self.chunking.block_ids(c).astype(jnp.result_type(int)), self.mesh, P("d"))
+        per_block, per_device = fetch(self.kernel(self.g_key, self.g_n, g_point, self.g_space, g_ids))
+        chunk = _reduce_chunk(per_block, per_device, self.chunking.real_blocks(c))
+        if self.store is not None:
+            self.store.save(p, c, chunk, self.chunking.meta(c))
+        return chunk
+
+
+class _NullBar:
+    def update(self, *_: Any) -> None: ...
+
+    def close(self) -> None: ...
 
 
 def sweep(
@@ -292,9 +372,7 @@ def sweep(
     key = as_key(key)
     key_data = np.asarray(jax.random.key_data(key))
     devices = resolve_devices(devices)
-    n_dev = len(devices)
     main = jax.process_index() == 0
-    multi = jax.process_count() > 1
     space = jax.tree_util.tree_map(np.asarray, space)
 
     point0 = {nm: jnp.zeros((), jnp.result_type(float)) for nm in design.names}
@@ -309,44 +387,18 @@ def sweep(
         "metrics": [[lf.name, list(lf.shape), lf.kind] for lf in leaves],
     }
     fingerprint = fingerprint_of(description)
-
-    n_blocks = math.ceil(n / block_size)
-    if chunk_size is None:
-        chunk_size = _stored_chunk_size(out, fingerprint) or min(DEFAULT_CHUNK, n_blocks * block_size)
-        chunk_size = math.ceil(chunk_size / block_size) * block_size
-    chunk_size = _check_int("chunk_size", chunk_size, 1)
-    if chunk_size % block_size:
-        raise ValueError(f"chunk_size: must be a multiple of block_size={block_size}, got {chunk_size}")
+    chunk_size = _resolve_chunk_size(chunk_size, out, fingerprint, n, block_size)
     per_chunk = chunk_size // block_size
-    padded = math.ceil(per_chunk / n_dev) * n_dev
-    n_chunks = math.ceil(n_blocks / per_chunk)
+    chunking = _Chunking(n, block_size, per_chunk, math.ceil(per_chunk / len(devices)) * len(devices))
     store = None
     if out is not None and main:
         store = ChunkStore(out, fingerprint, description, {"chunk_size": chunk_size}, resume)
+    kernel, mesh = _kernel(fn, space, design.names, leaves, block_size, chunking.padded, sketch, devices)
+    source = _ChunkSource(kernel, mesh, chunking, leaves, sketch, store, len(design), key_data, space)
 
-    kernel, mesh = _kernel(fn, space, design.names, leaves, block_size, padded, sketch, devices)
-    g_key = to_global(key_data, mesh, P())
-    g_n = to_global(np.asarray(n, jnp.result_type(int)), mesh, P())
-    g_space = jax.tree_util.tree_map(lambda v: to_global(v, mesh, P()), space)
-
-    done = np.zeros((len(design), n_chunks), bool)
-    if store is not None:
-        for p in range(len(design)):
-            for c in range(n_chunks):
-                done[p, c] = store.load(p, c, _chunk_meta(c, per_chunk, n_blocks)) is not None
-    if multi:
-        from jax.experimental import multihost_utils
-
-        done = np.asarray(multihost_utils.broadcast_one_to_all(done)).astype(bool)
-
-    def chunk_runs(c: int) -> int:
-        first = c * per_chunk * block_size
-        return min(n, first + per_chunk * block_size) - first
-
-    total = len(design) * n
-    initial = int(sum(chunk_runs(c) for p, c in zip(*np.nonzero(done))))
-    bar = (progress if (progress is not None and main) else _silent)(
-        total=total, initial=initial, unit="run", unit_scale=True, desc=fn_name.rsplit(".", 1)[-1])
+    initial = int(sum(chunking.runs(c) for _, c in zip(*np.nonzero(source.done))))
+    bar = progress(total=len(design) * n, initial=initial, unit="run", unit_scale=True,
+                   desc=fn_name.rsplit(".", 1)[-1]) if (progress is not None and main) else _NullBar()
     results = []
     try:
         for p in range(len(design)):
@@ -355,38 +407,24 @@ def sweep(
             g_point = {k: to_global(np.asarray(v, jnp.result_type(float)), mesh, P()) for k, v in point.items()}
             acc = _PointAccumulator(leaves, sketch)
             computed = loaded = runs_computed = 0
-            for c in range(n_chunks):
-                first = c * per_chunk
-                n_real = min(n_blocks, first + per_chunk) - first
-                chunk = None
-                if done[p, c]:
-                    chunk = store.load(p, c, _chunk_meta(c, per_chunk, n_blocks)) if store is not None else None
-                    if multi:  # process 0 read it: everyone gets it (or learns it must be computed)
-                        ok, data = multihost_utils.broadcast_one_to_all(
-                            (np.int32(chunk is not None),
-                             chunk if chunk is not None else _template(leaves, n_real, sketch)))
-                        chunk = {k: np.asarray(v) for k, v in data.items()} if int(ok) else None
-                    if chunk is not None:
-                        loaded += 1
-                if chunk is None:
-                    ids = np.full(padded, -1, np.int64)
-                    ids[:n_real] = np.arange(first, first + n_real)
-                    g_ids = to_global(ids.astype(jnp.result_type(int)), mesh, P("d"))
-                    per_block, per_device = fetch(kernel(g_key, g_n, g_point, g_space, g_ids))
-                    chunk = _reduce_chunk(per_block, per_device, n_real)
+            for c in range(chunking.n_chunks):
+                chunk = source.stored(p, c)
+                if chunk is not None:
+                    loaded += 1
+                else:
+                    chunk = source.compute(p, c, g_point)
                     computed += 1
-                    runs_computed += chunk_runs(c)
-                    if store is not None:
-                        store.save(p, c, chunk, _chunk_meta(c, per_chunk, n_blocks))
-                    bar.update(chunk_runs(c))
+                    runs_computed += chunking.runs(c)
+                    bar.update(chunking.runs(c))
                 acc.add(chunk)
             runs, by_name = acc.stats()
             raw = _raw_runs(fn, space, point, key, keep_runs) if keep_runs else None
             rejected = sum(1 for f, _ in (store.rejected if store else []) if f.startswith(f"p{p:05d}_"))
             results.append(MonteCarloResult(
                 runs=runs, by_name=by_name, treedef=treedef, point=point, raw=raw,
-                chunks_computed=computed, runs_computed=runs_computed, chunks_loaded=loaded, chunks_rejected=rejected,
-                devices=n_dev, processes=jax.process_count(), wall_s=time.perf_counter() - start))
+                chunks_computed=computed, runs_computed=runs_computed, chunks_loaded=loaded,
+                chunks_rejected=rejected, devices=len(devices), processes=jax.process_count(),
+                wall_s=time.perf_counter() - start))
     finally:
         bar.close()
     return SweepResult(design, results, fingerprint, Path(out) if out is not None else None,
@@ -398,9 +436,15 @@ def monte_carlo(fn: Callable[[jax.Array, Any], Any], space: Any, n: int, key: An
     return sweep(fn, space, single_point(), n, key, **kwargs).points[0]
 
 
-def _chunk_meta(c: int, per_chunk: int, n_blocks: int) -> dict[str, int]:
-    first = c * per_chunk
-    return {"first_block": first, "n_blocks": min(n_blocks, first + per_chunk) - first}
+def _resolve_chunk_size(chunk_size: int | None, out: str | Path | None, fingerprint: str, n: int,
+                        block_size: int) -> int:
+    if chunk_size is None:  # the folder's layout if it holds this sweep, else min(100k, n)
+        chunk_size = _stored_chunk_size(out, fingerprint) or min(DEFAULT_CHUNK, n)
+        chunk_size = math.ceil(chunk_size / block_size) * block_size
+    chunk_size = _check_int("chunk_size", chunk_size, 1)
+    if chunk_size % block_size:
+        raise ValueError(f"chunk_size: must be a multiple of block_size={block_size}, got {chunk_size}")
+    return chunk_size
 
 
 def _stored_chunk_size(out: str | Path | None, fingerprint: str) -> int | None:

@@ -2,7 +2,6 @@
 resume through the CLI, and the CLI's refusals (exit code 2, nothing written)."""
 
 import csv
-import dataclasses
 import json
 import os
 import subprocess
@@ -96,7 +95,7 @@ def test_cli_refuses_a_folder_of_another_sweep_and_a_study_without_per_run(two_d
 def test_noisy_pid_per_run_metric_matches_a_direct_simulation():
     from experiments.noisy_pid_mc import deterministic_itae
 
-    cfg = dataclasses.replace(STUDY.default_config(quick=True))
+    cfg = STUDY.default_config(quick=True)
     spec = STUDY.per_run(cfg)
     # maximum stability degree PI for 0.05 s³ + 0.6 s² + (1 + 2 kp) s + 2 ki: triple root at −4
     assert spec.nominal["kp"] == pytest.approx(0.7, rel=1e-12)
