@@ -110,7 +110,7 @@ def build_chunk_kernel(
             c[f"min/{lf.name}"] = jnp.full(lf.shape, jnp.inf, fdt)
             c[f"max/{lf.name}"] = jnp.full(lf.shape, -jnp.inf, fdt)
             if sketch is not None:
-                c[f"hist/{lf.name}"] = jnp.zeros((sketch.n_bins,) + lf.shape, jnp.int32)
+                c[f"hist/{lf.name}"] = jnp.zeros((sketch.n_bins,) + lf.shape, idt)
         return c
 
     def empty_block() -> dict[str, jax.Array]:
@@ -150,8 +150,8 @@ def build_chunk_kernel(
                 if sketch is not None:
                     size = int(np.prod(lf.shape, dtype=np.int64))
                     bins = sketch.bucket(jnp.where(ok, x, 0.0)).reshape(L, size)
-                    flat = (bins * size + jnp.arange(size, dtype=jnp.int32)).reshape(-1)
-                    hist = carry[f"hist/{lf.name}"].reshape(-1).at[flat].add(ok.reshape(-1).astype(jnp.int32))
+                    flat = (bins.astype(idt) * size + jnp.arange(size, dtype=idt)).reshape(-1)
+                    hist = carry[f"hist/{lf.name}"].reshape(-1).at[flat].add(ok.reshape(-1).astype(idt))
                     new[f"hist/{lf.name}"] = hist.reshape(carry[f"hist/{lf.name}"].shape)
             return new, out
 
