@@ -79,7 +79,7 @@ def piecewise_linear(x: Any, *params: Any) -> jax.Array:
     """Linear interpolation through ``(x_j, y_j)``; ``params = (x_1..x_k, y_1..y_k)``, ``x`` increasing."""
     k = len(params) // 2
     xs, ys = jnp.stack(params[:k]), jnp.stack(params[k:])
-    return jnp.interp(x, xs, ys)
+    return jnp.interp(jnp.asarray(x), xs, ys)
 
 
 MF_FUNCTIONS: dict[str, Callable[..., jax.Array]] = {
@@ -106,9 +106,10 @@ class Terms:
 
     def __call__(self, x: Any) -> jax.Array:
         """Memberships of ``x`` (any shape ``S``) in every term: shape ``S + (T,)``."""
-        x = jnp.asarray(x)[..., None]
         p = jnp.asarray(self.params)
-        return MF_FUNCTIONS[self.kind](x, *(p[:, j] for j in range(p.shape[1])))
+        if self.kind == "piecewise_linear":  # interpolation tables: one per term
+            return jax.vmap(lambda row: piecewise_linear(x, *row), out_axes=-1)(p)
+        return MF_FUNCTIONS[self.kind](jnp.asarray(x)[..., None], *(p[:, j] for j in range(p.shape[1])))
 
 
 def _validate_row(kind: str, row: np.ndarray, t: int) -> None:
