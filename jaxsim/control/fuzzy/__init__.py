@@ -11,7 +11,9 @@
   smooth forms) and the linear characteristic;
 * :mod:`.static_characteristic` — ``u(e)`` of a single-input system and the least-squares
   three-section fit;
-* :mod:`.controller` — fuzzy P/PI/PD/PID as a :class:`~jaxsim.core.system.Controller`.
+* :mod:`.controller` — fuzzy P/PI/PD/PID as a :class:`~jaxsim.core.system.Controller`;
+* :mod:`.templates` — odd-symmetric single-input Sugeno and Mamdani P controllers built from
+  breakpoints (tunable by gradient).
 
 Everything is a pytree: ``jax.grad`` reaches every membership-function parameter, and
 ``jax.vmap`` runs batches of systems or controllers of one structure.
@@ -53,6 +55,7 @@ from jaxsim.control.fuzzy.membership import (
 from jaxsim.control.fuzzy.norms import snorm, snorm_reduce, tnorm, tnorm_reduce
 from jaxsim.control.fuzzy.rules import RuleBase, grid_rule_base, rule_base
 from jaxsim.control.fuzzy.static_characteristic import ThreeSectionFit, fit_three_section, static_characteristic
+from jaxsim.control.fuzzy.templates import odd_input_terms, odd_mamdani, odd_sugeno
 
 __all__ = [
     "Linear", "ThreeSection", "from_gains", "linear", "three_section",
@@ -64,4 +67,5 @@ __all__ = [
     "snorm", "snorm_reduce", "tnorm", "tnorm_reduce",
     "RuleBase", "grid_rule_base", "rule_base",
     "ThreeSectionFit", "fit_three_section", "static_characteristic",
+    "odd_input_terms", "odd_mamdani", "odd_sugeno",
 ]

@@ -108,8 +108,9 @@ def three_section(a: Any, b: Any, c: Any, d: Any, *, form: str = "exact",
 
 def from_gains(k1: Any, k2: Any, a: Any, c: Any, **kwargs: Any) -> ThreeSection:
     """The characteristic with gains ``K1``, ``K2`` and breakpoints ``a < c``: ``b = K1 a``, ``d = b + K2 (c − a)``."""
-    b = jnp.asarray(k1, float) * a
-    return three_section(a, b, c, b + jnp.asarray(k2, float) * (jnp.asarray(c) - a), **kwargs)
+    xp = np if is_concrete((k1, k2, a, c)) else jnp  # concrete: plain NumPy, no XLA dispatch
+    b = xp.asarray(k1, float) * a
+    return three_section(a, b, c, b + xp.asarray(k2, float) * (xp.asarray(c, float) - a), **kwargs)
 
 
 @pytree_dataclass

@@ -103,3 +103,17 @@ def test_static_characteristic_of_a_single_input_mamdani_and_its_fit():
     a, b, c, d = fit.abcd
     assert 0 < a < c and 0 < b < d
     assert fit.rms < 0.05 * d  # three sections describe the curve to a few percent of its range
+
+
+def test_odd_sugeno_template_is_exactly_the_three_section_characteristic():
+    e = jnp.linspace(-3.0, 3.0, 601)
+    sug = fz.odd_sugeno([0.75, 1.2], [0.3, 1.0])
+    u = jax.jit(fz.static_characteristic)(sug, e)
+    np.testing.assert_allclose(u, fz.three_section(0.75, 0.3, 1.2, 1.0)(e), atol=1e-14)
+
+
+def test_odd_mamdani_template_has_the_three_section_shape():
+    mam = fz.odd_mamdani([0.75, 1.2], [0.3, 1.0], 0.1, u_range=1.5)
+    e = jnp.linspace(-3.0, 3.0, 301)
+    fit = fz.fit_three_section(e, jax.jit(fz.static_characteristic)(mam, e))
+    assert fit.abcd == pytest.approx((0.75, 0.3, 1.2, 1.0), abs=0.06)
