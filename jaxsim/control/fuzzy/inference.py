@@ -179,6 +179,15 @@ def evaluate(fis: FuzzySystem, x: Any) -> jax.Array:
     raise ValueError(f"fis: unknown output type {type(out).__name__}")
 
 
+def evaluate_batch(fis: FuzzySystem, xs: Any, batch_size: int = 1024) -> jax.Array:
+    """``evaluate`` over a batch ``xs`` ``(B, n)`` → ``(B,)``: ``vmap`` over chunks of ``batch_size``.
+
+    Same values as ``jax.vmap(evaluate, in_axes=(None, 0))``; chunking keeps the per-chunk
+    intermediates (terms × grid per input) in cache, several times faster for large ``B`` on CPU.
+    """
+    return jax.lax.map(lambda x: evaluate(fis, x), jnp.asarray(xs), batch_size=batch_size)
+
+
 # --------------------------------------------------------------------------------------------
 # Constructors (the public boundary: every argument is checked here, not on pytree unflatten).
 
