@@ -97,6 +97,14 @@ def test_vmap_over_system_parameters_equals_a_loop():
         assert float(batched[k]) == pytest.approx(float(jax.jit(fz.evaluate)(one, x)), abs=1e-13)
 
 
+def test_evaluate_batch_equals_vmap():
+    fis = _mamdani()
+    xs = jnp.asarray(np.random.default_rng(1).uniform(-1.5, 1.5, (37, 2)))
+    chunked = jax.jit(lambda v: fz.evaluate_batch(fis, v, batch_size=8))(xs)
+    whole = jax.jit(jax.vmap(lambda v: fz.evaluate(fis, v)))(xs)
+    np.testing.assert_allclose(chunked, whole, rtol=0, atol=1e-14)
+
+
 def test_rule_base_validation_names_the_argument():
     with pytest.raises(ValueError, match="antecedents: empty rule base"):
         fz.rule_base(np.zeros((0, 2), int), np.zeros(0, int))
