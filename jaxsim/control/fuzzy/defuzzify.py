@@ -9,8 +9,16 @@ its activation level ``α_t`` (the accumulated strength of the rules that fire i
 The output terms are sampled on a grid ``x_1 < … < x_N`` and read as piecewise linear between the
 samples.  Clipping a linear segment at ``α_t`` creates a corner where the segment crosses ``α_t``;
 :func:`clipped_points` inserts these *cut points* (the universe scikit-fuzzy's control API builds),
-so the areas below are exact for the clipped piecewise-linear terms.  A product keeps segments
-linear, so :func:`scaled_points` needs no extra points.
+so the areas below are exact for the clipped piecewise-linear terms.  For unimodal terms (every MF
+kind but piecewise-linear) each term has at most two cut points, found directly by
+:func:`unimodal_cuts`; :func:`clipped_points_unimodal` merges them into the grid and
+:func:`centroid_clipped_unimodal` integrates without building the merged set (the fast path
+``evaluate`` takes for Mamdani centroids).  A product keeps segments linear, so
+:func:`scaled_points` needs no extra points.
+
+The bisector is solved as ``s = 2A/(y1 + sqrt(y1² + 2mA))`` inside its segment, which stays exact
+for nearly flat segments; scikit-fuzzy's ``x1 − (y1 − sqrt(y1² + 2mA))/m`` cancels catastrophically
+when the slope ``m`` is a rounding error (seen as ~3e-2 differences on clipped plateaus).
 
 Defuzzifiers take such a piecewise-linear set given by points ``(xs, mu)`` (``xs`` non-decreasing;
 repeated abscissae are zero-width segments and change nothing):
