@@ -215,7 +215,7 @@ def _build(inputs: Sequence[Any], output: Any, rules: RuleBase, weights: Any, an
     if w.shape != (rules.n_rules,):
         raise ValueError(f"weights: expected shape ({rules.n_rules},), got {w.shape}")
     check_finite("weights", w)
-    if is_concrete(w) and bool(jnp.any((w < 0) | (w > 1))):
+    if is_concrete(w) and np.any((np.asarray(w) < 0) | (np.asarray(w) > 1)):  # NumPy: safe inside jit
         raise ValueError(f"weights: rule weights must lie in [0, 1], got {np.asarray(w).tolist()}")
     return FuzzySystem(ins, output, w, rules, and_norm, or_norm, accumulation)
 
@@ -244,7 +244,7 @@ def mamdani(inputs: Sequence[Any], output_grid: Any, output_terms: Any, rules: R
     if grid.ndim != 1 or grid.shape[0] < 2:
         raise ValueError(f"output_grid: expected shape (N,) with N ≥ 2, got {grid.shape}")
     check_finite("output_grid", grid)
-    if is_concrete(grid) and bool(jnp.any(jnp.diff(grid) <= 0)):
+    if is_concrete(grid) and np.any(np.diff(np.asarray(grid)) <= 0):
         raise ValueError("output_grid: must be strictly increasing")
     out = MamdaniOutput(grid, _as_terms("output_terms", output_terms), implication, defuzzifier)
     return _build(inputs, out, rules, weights, and_norm, or_norm, accumulation)

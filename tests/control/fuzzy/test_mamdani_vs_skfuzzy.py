@@ -209,3 +209,31 @@ def test_empty_output_set_returns_the_grid_middle():
     fis = fz.mamdani([("triangular", [[-1.0, 0.0, 1.0]])], np.linspace(-1.0, 3.0, 21),
                      ("triangular", [[0.0, 1.0, 2.0]]), fz.rule_base([[0]], [0]))
     assert float(jax.jit(fz.evaluate)(fis, jnp.asarray([5.0]))) == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("n", [1, 2, 5, 14, 16, 37, 70])
+def test_sorting_network_equals_a_sort(n):
+    rng = np.random.default_rng(n)
+    keys = rng.uniform(-1, 1, (n, 3))
+    keys[n // 2] = keys[0]  # ties
+    rows = np.repeat(np.arange(n)[:, None], 3, axis=1)  # payload: each key's original row
+    ks, moved = jax.jit(dfz.sort_along_first_axis)(jnp.asarray(keys), jnp.asarray(rows))
+    np.testing.assert_array_equal(ks, np.sort(keys, axis=0))
+    np.testing.assert_array_equal(keys[np.asarray(moved), np.arange(3)], ks)  # payload moved with its key
+
+
+def test_fast_centroid_when_cut_points_fall_on_grid_nodes():
+    # Triangles with corners on a 1/30 lattice, evaluated at lattice inputs: many cut points land
+    # exactly on output-grid nodes and on each other (ties the fast path must not divide by).
+    c = np.linspace(-1.0, 1.0, 7)
+    tri = np.stack([c - 1 / 3, c, c + 1 / 3], axis=1)
+    table = np.clip(np.add.outer(np.arange(7), np.arange(7)) - 3, 0, 6)
+    fis = fz.mamdani([("triangular", tri)] * 2, np.linspace(-1.5, 1.5, 101), ("triangular", tri),
+                     fz.grid_rule_base(table))
+    xs = np.stack(np.meshgrid(np.linspace(-1, 1, 61), np.linspace(-1, 1, 61)), -1).reshape(-1, 2)
+    # the same system with piecewise-linear output terms takes the general (per-interval sort) path
+    p = np.asarray(fis.output.terms.params)
+    pl = np.concatenate([p, np.tile([0.0, 1.0, 0.0], (p.shape[0], 1))], axis=1)
+    general_fis = fz.mamdani(list(fis.inputs), fis.output.grid, ("piecewise_linear", pl), fis.rules)
+    batch = lambda f: jax.jit(jax.vmap(lambda x: fz.evaluate(f, x)))(jnp.asarray(xs))  # noqa: E731
+    np.testing.assert_allclose(batch(fis), batch(general_fis), atol=1e-12)
