@@ -7,6 +7,7 @@ linear model the EKF *is* the Kalman filter (same arithmetic).
 
 from __future__ import annotations
 
+import functools
 from typing import Any, Callable
 
 import jax
@@ -55,7 +56,11 @@ def extended_kalman_filter(
     validate_nonlinear(model)
     y, m = prepare_measurements(y, model.n_outputs, mask, missing)
     u = None if u is None else jnp.asarray(u)
+    return _ekf_scan(model, y, m, u, form, gate)
 
+
+@functools.partial(jax.jit, static_argnames=("form", "gate"))
+def _ekf_scan(model: NonlinearSSM, y, m, u, form: str, gate: float | None) -> FilterResult:
     def update(state, y_t, m_t, _):
         return ekf_update(state, y_t, model.h, model.R, mask=m_t, form=form)
 

@@ -17,6 +17,7 @@ rejected steps show as ``accepted = False`` (see :mod:`jaxsim.estimation.gating`
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import jax
@@ -202,6 +203,7 @@ def kalman_filter(
     return _scan_filter(model, y, m, u, form, gate)
 
 
+@functools.partial(jax.jit, static_argnames=("form", "gate"))
 def _scan_filter(model, y, m, u, form, gate) -> FilterResult:
     def update(state, y_t, m_t, p):
         H, R = at(model, p, "H"), at(model, p, "R")

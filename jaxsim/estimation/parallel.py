@@ -107,6 +107,11 @@ def parallel_kalman_filter(
     validate_model(model, n_steps=int(jnp.shape(y)[0]) if jnp.ndim(y) >= 1 else None)
     y, m = prepare_measurements(y, model.n_outputs, mask, missing)
     u = prepare_inputs(u, y.shape[0], model)
+    return _parallel_filter(model, y, m, u)
+
+
+@jax.jit
+def _parallel_filter(model: LinearGaussianSSM, y: jax.Array, m: jax.Array, u: jax.Array | None) -> FilterResult:
     t = y.shape[0]
     F, Q, c, H, R = _per_step(model, t, u)
     elems = _filter_elements(model, y, m, F, Q, c, H, R)
@@ -144,6 +149,11 @@ def parallel_rts_smoother(
 ) -> SmootherResult:
     """RTS smoother by associative scan over the parallel filter; same results as ``rts_smoother``."""
     filtered = parallel_kalman_filter(model, y, u, mask=mask, missing=missing)
+    return _parallel_smooth(model, filtered)
+
+
+@jax.jit
+def _parallel_smooth(model: LinearGaussianSSM, filtered: FilterResult) -> SmootherResult:
     t = filtered.means.shape[0]
     F_next = model.F[:-1] if is_time_varying(model, "F") else jnp.broadcast_to(model.F, (t - 1,) + model.F.shape)
     cross = filtered.covs[:-1] @ jnp.swapaxes(F_next, -1, -2)

@@ -11,6 +11,7 @@ the points propagated by ``predict``; the two agree when ``Q = 0`` or after a re
 
 from __future__ import annotations
 
+import functools
 from typing import Any, Callable, Protocol
 
 import jax
@@ -106,7 +107,11 @@ def sigma_point_filter(
     validate_nonlinear(model)
     y, m = prepare_measurements(y, model.n_outputs, mask, missing)
     u = None if u is None else jnp.asarray(u)
+    return _sigma_scan(model, scheme, y, m, u, gate)
 
+
+@functools.partial(jax.jit, static_argnames=("gate",))
+def _sigma_scan(model: NonlinearSSM, scheme: SigmaPointScheme, y, m, u, gate: float | None) -> FilterResult:
     def update(state, y_t, m_t, _):
         return ukf_update(state, y_t, model.h, model.R, scheme, mask=m_t)
 
