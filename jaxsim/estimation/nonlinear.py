@@ -56,7 +56,7 @@ def nonlinear_ssm(
 
 
 def validate_nonlinear(model: NonlinearSSM) -> None:
-    """Shapes and PSD of ``Q, R, P0``; output shapes of ``f`` and ``h`` (by ``eval_shape``)."""
+    """Shapes and PSD of ``Q, R, P0``; output shapes of ``h`` and of ``f`` (when it accepts ``u=None``)."""
     if np.ndim(model.m0) != 1:
         raise ValueError(f"m0: expected shape (n,), got {tuple(np.shape(model.m0))}")
     n = model.n_states
@@ -65,8 +65,11 @@ def validate_nonlinear(model: NonlinearSSM) -> None:
     check_covariance("Q", model.Q, n)
     check_covariance("R", model.R)
     x = jax.ShapeDtypeStruct((n,), jnp.result_type(model.m0, float))
-    fx = jax.eval_shape(lambda z: model.f(z), x)
-    if fx.shape != (n,):
+    try:  # a transition that needs an input cannot be shape-checked without one
+        fx = jax.eval_shape(lambda z: model.f(z), x)
+    except (TypeError, AttributeError, IndexError):
+        fx = None
+    if fx is not None and fx.shape != (n,):
         raise ValueError(f"transition: must return shape ({n},), returned {fx.shape}")
     hx = jax.eval_shape(lambda z: model.h(z), x)
     if hx.shape != (model.n_outputs,):

@@ -10,6 +10,7 @@ estimate ``Σ_t log Σ_i w_{t−1,i} p(y_t | x_{t,i})``.
 
 from __future__ import annotations
 
+import functools
 from typing import Any, Callable, NamedTuple
 
 import jax
@@ -170,11 +171,16 @@ def bootstrap_filter(
     if y.ndim != 2:
         raise ValueError(f"y: expected shape (T, p), got {tuple(y.shape)}")
     y, m = prepare_measurements(y, y.shape[1], None if mask is None else jnp.asarray(mask), missing)
-    available = jnp.all(m, axis=1)
+    u = None if u is None else jnp.asarray(u)
+    return _run_particle_filter(model, key, y, jnp.all(m, axis=1), u, int(n_particles), resampling,
+                                float(ess_threshold))
+
+
+@functools.partial(jax.jit, static_argnames=("n_particles", "resampling", "ess_threshold"))
+def _run_particle_filter(model, key, y, available, u, n_particles, resampling, ess_threshold) -> ParticleResult:
     k0, k1 = jax.random.split(key)
     state = pf_init(model, k0, int(n_particles))
     keys = jax.random.split(k1, y.shape[0])
-    u = None if u is None else jnp.asarray(u)
 
     def step(s, inp):
         k, y_t, a_t, u_t = inp
