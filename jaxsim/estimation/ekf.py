@@ -23,7 +23,7 @@ from jaxsim.estimation.types import FilterResult, GaussianState, Innovation
 def ekf_predict(state: GaussianState, fx: Callable[[jax.Array], jax.Array], Q: jax.Array) -> GaussianState:
     """``m⁻ = f(m)``, ``P⁻ = F P Fᵀ + Q`` with ``F = ∂f/∂x`` at ``m``."""
     mean, F = fx(state.mean), jax.jacfwd(fx)(state.mean)
-    return GaussianState(mean, kalman.symmetrize(F @ state.cov @ F.T + Q))
+    return GaussianState(mean, kalman.propagate_covariance(state.cov, F, Q))
 
 
 def ekf_update(

@@ -25,6 +25,7 @@ import math
 import jax
 import jax.numpy as jnp
 
+from jaxsim.estimation import linalg
 from jaxsim.estimation.types import GaussianState, Innovation, SqrtGaussianState
 
 LOG_2PI = math.log(2.0 * math.pi)
@@ -54,14 +55,17 @@ def mask_measurement(
     return res_m, h_m, r_m
 
 
-def innovation_stats(residual: jax.Array, chol_s: jax.Array, mask: jax.Array) -> Innovation:
+def innovation_stats(
+    residual: jax.Array, chol_s: jax.Array, mask: jax.Array, s: jax.Array | None = None
+) -> Innovation:
     """NIS and Gaussian log-likelihood of ``residual`` given the Cholesky factor of ``S``."""
-    z = jax.scipy.linalg.solve_triangular(chol_s, residual, lower=True)
+    z = linalg.solve_lower(chol_s, residual)
     nis = jnp.dot(z, z)
     dof = jnp.sum(mask)
     logdet = 2.0 * jnp.sum(jnp.log(jnp.abs(jnp.diagonal(chol_s))))
     ll = -0.5 * (nis + logdet + dof * LOG_2PI)
-    s = chol_s @ chol_s.T
+    if s is None:
+        s = chol_s @ chol_s.T
     return Innovation(residual, s, ll, nis, dof)
 
 
@@ -76,8 +80,12 @@ def predict(
     mean = F @ state.mean
     if B is not None and u is not None:
         mean = mean + B @ u
-    cov = symmetrize(F @ state.cov @ F.T + Q)
-    return GaussianState(mean, cov)
+    return GaussianState(mean, propagate_covariance(state.cov, F, Q))
+
+
+def propagate_covariance(P: jax.Array, F: jax.Array, Q: jax.Array) -> jax.Array:
+    """``F P Fᵀ + Q``, symmetrised."""
+    return symmetrize(linalg.matmul(linalg.matmul(F, P), F.T) + Q)
 
 
 def condition(
@@ -99,17 +107,19 @@ def condition(
     mask = full_mask(p, mask)
     res, h, r = mask_measurement(residual, H, R, mask)
     P = state.cov
-    ph = P @ h.T
-    s = symmetrize(h @ ph + r)
-    chol_s = jnp.linalg.cholesky(s)
-    k = jax.scipy.linalg.cho_solve((chol_s, True), ph.T).T
+    mm = linalg.matmul
+    ph = mm(P, h.T)
+    s = symmetrize(mm(h, ph) + r)
+    chol_s = linalg.cholesky(s)
+    k = linalg.cho_solve(chol_s, ph.T).T
     mean = state.mean + k @ res
     if form == "joseph":
-        ikh = jnp.eye(P.shape[0], dtype=P.dtype) - k @ h
-        cov = ikh @ P @ ikh.T + k @ r @ k.T
+        ikh = jnp.eye(P.shape[0], dtype=P.dtype) - mm(k, h)
+        kr = mm(k, r)
+        cov = mm(mm(ikh, P), ikh.T) + mm(kr, k.T)
     else:
-        cov = P - k @ s @ k.T
-    return GaussianState(mean, symmetrize(cov)), innovation_stats(res, chol_s, mask)
+        cov = P - mm(mm(k, s), k.T)
+    return GaussianState(mean, symmetrize(cov)), innovation_stats(res, chol_s, mask, s)
 
 
 def update(
@@ -180,7 +190,7 @@ def sqrt_update(
     chol_s = post[:p, :p]
     kbar = post[p:, :p]  # K S^{1/2}
     chol_post = post[p:, p:]
-    z = jax.scipy.linalg.solve_triangular(chol_s, res, lower=True)
+    z = linalg.solve_lower(chol_s, res)
     mean = state.mean + kbar @ z
     return SqrtGaussianState(mean, chol_post), innovation_stats(res, chol_s, m)
 
@@ -202,8 +212,9 @@ def condition_moments(
     mask = full_mask(p, mask)
     res, _, s = mask_measurement(residual, None, S, mask)
     c = jnp.where(mask[None, :], cross, 0.0)
-    chol_s = jnp.linalg.cholesky(symmetrize(s))
-    k = jax.scipy.linalg.cho_solve((chol_s, True), c.T).T
+    s = symmetrize(s)
+    chol_s = linalg.cholesky(s)
+    k = linalg.cho_solve(chol_s, c.T).T
     mean = state.mean + k @ res
     cov = symmetrize(state.cov - k @ s @ k.T)
-    return GaussianState(mean, cov), innovation_stats(res, chol_s, mask)
+    return GaussianState(mean, cov), innovation_stats(res, chol_s, mask, s)

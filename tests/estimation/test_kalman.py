@@ -204,3 +204,20 @@ class TestBadInput:
     def test_unknown_form(self):
         with pytest.raises(ValueError, match="^form:"):
             kalman_filter(self.model, self.y, form="information")
+
+
+def test_shared_gain_filter_equals_full_filter_for_every_run():
+    from jaxsim.estimation.shared_gain import covariance_sequence, mean_filter
+
+    rng = np.random.default_rng(8)
+    model = random_model(rng, n=4, p=2, m=1)
+    u = rng.standard_normal((20, 1))
+    mask = rng.random((20, 2)) > 0.3
+    ys = jax.vmap(lambda k: sample(model, k, 20, u)[1])(jax.random.split(jax.random.PRNGKey(1), 5))
+    seq = covariance_sequence(model, 20, mask=mask)
+    runs = jax.jit(jax.vmap(lambda y: mean_filter(model, seq, y, u)))(ys)
+    for i in range(5):
+        ref = kalman_filter(model, ys[i], u, mask=mask)
+        np.testing.assert_allclose(runs.means[i], ref.means, rtol=1e-11, atol=1e-12)
+        np.testing.assert_allclose(runs.log_likelihood[i], ref.log_likelihood, rtol=1e-12)
+    np.testing.assert_allclose(seq.covs, ref.covs, rtol=1e-12)
