@@ -27,6 +27,7 @@ Usage: ``python -m experiments.benchmarks.kalman_filter [--runs 100000] [--steps
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import statistics
 import time
@@ -37,6 +38,7 @@ import numpy as np
 
 import jaxsim  # noqa: F401  (float64)
 from experiments.benchmarks.closed_loop_pid import shard_batch
+from jaxsim.core.pytree import replace
 from jaxsim.estimation.lgssm import LinearGaussianSSM, kalman_filter, lgssm, sample
 from jaxsim.estimation.shared_gain import covariance_sequence, mean_filter
 
@@ -84,14 +86,32 @@ def _median_time(fn, repeats: int) -> float:
     return statistics.median(times)
 
 
-def make_data(model: LinearGaussianSSM, runs: int, steps: int, chunk: int, seed: int = 0) -> list[jax.Array]:
-    gen = jax.jit(jax.vmap(lambda k: sample(model, k, steps)[1]))
-    keys = jax.random.split(jax.random.PRNGKey(seed), runs)
-    return [gen(keys[i:i + chunk]).block_until_ready() for i in range(0, runs, chunk)]
+def data_chunk(index: int, chunk: int, steps: int, dtype) -> jax.Array:
+    """Measurements ``(chunk, steps, 2)`` of runs ``index·chunk …``, drawn in float64 from the
+    shared model and cast to ``dtype`` (the same draws for every implementation and dtype)."""
+    keys = jax.random.split(jax.random.fold_in(jax.random.PRNGKey(0), index), chunk)
+    y = _generate(cv_model(jnp.float64), keys, steps)
+    return shard_batch(np.asarray(y), dtype)
+
+
+@functools.partial(jax.jit, static_argnums=2)
+def _generate(model, keys, steps):
+    return jax.vmap(lambda k: sample(model, k, steps)[1])(keys)
+
+
+def run_scales(runs: int) -> np.ndarray:
+    """Per-run measurement-noise scale factors of the per-run-model scenario, in [0.5, 2]."""
+    return np.exp(np.random.default_rng(1).uniform(np.log(0.5), np.log(2.0), runs))
 
 
 def ours_generic(model: LinearGaussianSSM):
+    """vmap over measurement sequences (the covariance recursion is unbatched: shared by all runs)."""
     return jax.jit(jax.vmap(lambda y: kalman_filter(model, y).log_likelihood))
+
+
+def ours_per_run(model: LinearGaussianSSM):
+    """vmap over (measurements, R scale): every run carries its own covariance recursion."""
+    return jax.jit(jax.vmap(lambda y, s: kalman_filter(replace(model, R=model.R * s), y).log_likelihood))
 
 
 def ours_shared(model: LinearGaussianSSM, steps: int):
@@ -99,21 +119,37 @@ def ours_shared(model: LinearGaussianSSM, steps: int):
     return jax.jit(jax.vmap(lambda y: mean_filter(model, seq, y, save_means=False).log_likelihood))
 
 
-def run_chunks(fn, chunks) -> np.ndarray:
-    outs = [fn(c) for c in chunks]
-    return np.concatenate([np.asarray(o.block_until_ready()) for o in outs])
+def time_sweep(fn, runs, chunk, steps, dtype, repeats, scales=None) -> tuple[float, np.ndarray, float]:
+    """Median wall time of ``fn`` over all runs (chunk by chunk, data generation not timed), the
+    log-likelihoods of the first chunk, and the first (compiling) call's time."""
+    total, first_ll, first_call = 0.0, None, 0.0
+    for i in range(-(-runs // chunk)):
+        y = data_chunk(i, chunk, steps, dtype)
+        args = (y,) if scales is None else (y, jnp.asarray(scales[i * chunk:(i + 1) * chunk], dtype))
+        if i == 0:
+            start = time.perf_counter()
+            first_ll = np.asarray(fn(*args).block_until_ready())
+            first_call = time.perf_counter() - start
+        total += _median_time(lambda: fn(*args).block_until_ready(), repeats)
+    return total, first_ll, first_call
 
 
-def dynamax_fn(model: LinearGaussianSSM):
+def dynamax_fn(model: LinearGaussianSSM, per_run: bool = False):
     from dynamax.linear_gaussian_ssm.inference import lgssm_filter, make_lgssm_params
 
-    params = make_lgssm_params(model.m0, model.P0, model.F, model.Q, model.H, model.R)
-    return jax.jit(jax.vmap(lambda y: lgssm_filter(params, y).marginal_loglik))
+    def ll(y, s=1.0):
+        params = make_lgssm_params(model.m0, model.P0, model.F, model.Q, model.H, model.R * s)
+        return lgssm_filter(params, y).marginal_loglik
+
+    return jax.jit(jax.vmap(ll) if per_run else jax.vmap(lambda y: ll(y)))
 
 
-def numpy_filter(model: LinearGaussianSSM, y: np.ndarray) -> np.ndarray:
-    """Kalman filter vectorised over runs: ``y (N, T, p)``; per-run covariances ``(N, n, n)``."""
+def numpy_filter(model: LinearGaussianSSM, y: np.ndarray, scales: np.ndarray | None = None) -> np.ndarray:
+    """Kalman filter vectorised over runs: ``y (N, T, p)``; per-run covariances ``(N, n, n)``
+    (per-run ``R·scales[i]`` if given)."""
     F, Q, H, R = (np.asarray(v, float) for v in (model.F, model.Q, model.H, model.R))
+    if scales is not None:
+        R = R[None] * np.asarray(scales)[:, None, None]
     n_runs, steps, p = y.shape
     n = F.shape[0]
     m = np.broadcast_to(np.asarray(model.m0, float), (n_runs, n)).copy()
@@ -184,84 +220,91 @@ def main(argv=None) -> dict:
     ap.add_argument("--chunk", type=int, default=10_000, help="runs per jitted call (memory bound)")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--dynamax-runs", type=int, default=2000)
-    ap.add_argument("--numpy-runs", type=int, default=2000)
+    ap.add_argument("--numpy-runs", type=int, default=1000)
     ap.add_argument("--filterpy-runs", type=int, default=3)
     ap.add_argument("--json", default=None)
     args = ap.parse_args(argv)
     runs, steps = args.runs, args.steps
     chunk = min(args.chunk, runs)
     work = steps * runs
+    n_sub = max(args.dynamax_runs, args.numpy_runs, args.filterpy_runs)
+    if n_sub > chunk:
+        ap.error(f"the peers' subsets ({n_sub} runs) must fit in one chunk ({chunk})")
     out: dict = {"runs": runs, "steps": steps, "chunk": chunk, "devices": str(jax.devices()),
                  "flops_per_step_generic": generic_step_flops(), "flops_per_step_shared": shared_step_flops()}
-
     model64, model32 = cv_model(jnp.float64), cv_model(jnp.float32)
-    chunks64 = [shard_batch(c, jnp.float64) for c in make_data(model64, runs, steps, chunk)]
-    ref_y = np.asarray(chunks64[0][: max(args.dynamax_runs, args.numpy_runs, args.filterpy_runs)])
+    scales = run_scales(runs)
+    sub_y = np.asarray(data_chunk(0, chunk, steps, jnp.float64))[:n_sub]  # the first runs of chunk 0
+    seconds: dict[str, dict[str, float]] = {"shared_model": {}, "per_run_model": {}}
+    lls: dict[str, dict[str, np.ndarray]] = {"shared_model": {}, "per_run_model": {}}
 
-    results: dict[str, float] = {}
-    lls: dict[str, np.ndarray] = {}
+    def ours(scenario, name, fn, dtype, with_scales=False):
+        t, ll, first = time_sweep(fn, runs, chunk, steps, dtype, args.repeats,
+                                  scales if with_scales else None)
+        seconds[scenario][name], lls[scenario][name] = t, ll
+        out[f"{scenario}/{name}_first_call_s"] = first
 
-    def time_ours(name, fn, chunks):
-        start = time.perf_counter()
-        lls[name] = run_chunks(fn, chunks[:1])
-        out[f"{name}_first_call_s"] = time.perf_counter() - start
-        results[name] = _median_time(lambda: run_chunks(fn, chunks), args.repeats)
-        lls[name] = run_chunks(fn, chunks[:1])
+    def peer(scenario, name, fn, n):
+        lls[scenario][name] = np.asarray(fn())
+        seconds[scenario][name] = _median_time(fn, args.repeats) * runs / n
 
-    time_ours("ours_generic_f64", ours_generic(model64), chunks64)
-    time_ours("ours_shared_f64", ours_shared(model64, steps), chunks64)
-    chunks32 = [c.astype(jnp.float32) for c in chunks64]
-    time_ours("ours_generic_f32", ours_generic(model32), chunks32)
-    time_ours("ours_shared_f32", ours_shared(model32, steps), chunks32)
-    del chunks32
-
+    # --- scenario 1: all runs share the model (the issue's benchmark) --------------------------
+    ours("shared_model", "ours_vmap_f64", ours_generic(model64), jnp.float64)
+    ours("shared_model", "ours_vmap_f32", ours_generic(model32), jnp.float32)
+    ours("shared_model", "ours_shared_gain_f64", ours_shared(model64, steps), jnp.float64)
+    ours("shared_model", "ours_shared_gain_f32", ours_shared(model32, steps), jnp.float32)
     try:
         dyn = dynamax_fn(model64)
-        sub = jnp.asarray(ref_y[: args.dynamax_runs])
-        lls["dynamax"] = np.asarray(dyn(sub).block_until_ready())
-        results["dynamax"] = _median_time(lambda: dyn(sub).block_until_ready(), args.repeats) * runs / args.dynamax_runs
+        y_dyn = jnp.asarray(sub_y[: args.dynamax_runs])
+        dyn(y_dyn).block_until_ready()
+        peer("shared_model", "dynamax_vmap_f64", lambda: dyn(y_dyn).block_until_ready(), args.dynamax_runs)
     except ImportError:
         out["dynamax"] = "not installed"
-
-    sub = ref_y[: args.numpy_runs]
-    lls["numpy_generic"] = numpy_filter(model64, sub)
-    results["numpy_generic"] = _median_time(lambda: numpy_filter(model64, sub), max(1, args.repeats - 1)) \
-        * runs / args.numpy_runs
-    lls["numpy_shared"] = numpy_shared(model64, sub)
-    results["numpy_shared"] = _median_time(lambda: numpy_shared(model64, sub), max(1, args.repeats - 1)) \
-        * runs / args.numpy_runs
-
+    y_np = sub_y[: args.numpy_runs]
+    peer("shared_model", "numpy_vectorised", lambda: numpy_filter(model64, y_np), args.numpy_runs)
+    peer("shared_model", "numpy_shared_gain", lambda: numpy_shared(model64, y_np), args.numpy_runs)
     start = time.perf_counter()
-    lls["filterpy"] = np.array([filterpy_loglik(model64, ref_y[i]) for i in range(args.filterpy_runs)])
-    results["filterpy"] = (time.perf_counter() - start) * runs / args.filterpy_runs
+    lls["shared_model"]["filterpy_loop"] = np.array(
+        [filterpy_loglik(model64, sub_y[i]) for i in range(args.filterpy_runs)])
+    seconds["shared_model"]["filterpy_loop"] = (time.perf_counter() - start) * runs / args.filterpy_runs
 
-    ref = lls["ours_generic_f64"]
-    out["max_rel_loglik_diff_vs_ours_f64"] = {
-        k: float(np.max(np.abs(v - ref[: len(v)]) / np.abs(ref[: len(v)]))) for k, v in lls.items()}
+    # --- scenario 2: every run has its own R (a sweep over a model parameter) -------------------
+    ours("per_run_model", "ours_vmap_f64", ours_per_run(model64), jnp.float64, True)
+    ours("per_run_model", "ours_vmap_f32", ours_per_run(model32), jnp.float32, True)
+    if "dynamax" not in out:
+        dyn2 = dynamax_fn(model64, per_run=True)
+        s_dyn = jnp.asarray(scales[: args.dynamax_runs])
+        dyn2(y_dyn, s_dyn).block_until_ready()
+        peer("per_run_model", "dynamax_vmap_f64", lambda: dyn2(y_dyn, s_dyn).block_until_ready(), args.dynamax_runs)
+    peer("per_run_model", "numpy_vectorised", lambda: numpy_filter(model64, y_np, scales[: args.numpy_runs]),
+         args.numpy_runs)
+
     peak64, peak32 = matmul_peak(jnp.float64), matmul_peak(jnp.float32)
-    out["matmul_peak_gflops_f64"], out["matmul_peak_gflops_f32"] = peak64, peak32
-    out["seconds"] = results
-    base = results["ours_generic_f64"]
-    print(f"Kalman filter 4×2, {steps} steps × {runs} runs, devices {out['devices']} "
-          f"(peers extrapolated from subsets; median of {args.repeats})")
-    print(f"{'implementation':<26}{'wall s':>12}{'× ours f64':>12}{'GFLOP/s':>10}{'rel. ll diff':>14}")
-    for name, sec in results.items():
-        flops = shared_step_flops() if "shared" in name else generic_step_flops()
-        gflops = flops * work / sec / 1e9
-        diff = out["max_rel_loglik_diff_vs_ours_f64"].get(name, float("nan"))
-        print(f"{name:<26}{sec:>12.3f}{sec / base:>12.2f}{gflops:>10.2f}{diff:>14.1e}")
-    print(f"speed-ups: ours generic f64 vs FilterPy {results['filterpy'] / base:.0f}×, "
-          f"vs NumPy vectorised {results['numpy_generic'] / base:.1f}×"
-          + (f", vs dynamax {results['dynamax'] / base:.1f}×" if "dynamax" in results else ""))
-    best = min(v for k, v in results.items() if k.startswith("ours"))
-    print(f"           best of ours ({min((v, k) for k, v in results.items() if k.startswith('ours'))[1]}) "
-          f"vs FilterPy {results['filterpy'] / best:.0f}×"
-          + (f", vs dynamax {results['dynamax'] / best:.0f}×" if "dynamax" in results else ""))
-    print(f"matmul peak (2048² jnp.dot): {peak64:.1f} GFLOP/s float64, {peak32:.1f} GFLOP/s float32; "
-          f"flops/step: generic {generic_step_flops()}, shared-gain {shared_step_flops()}")
+    out.update(matmul_peak_gflops_f64=peak64, matmul_peak_gflops_f32=peak32, seconds=seconds)
+    print(f"Kalman filter 4 states / 2 measurements, {steps} steps × {runs} runs; devices {out['devices']}")
+    print(f"(peers timed on subsets and extrapolated linearly; medians of {args.repeats}; "
+          f"matmul peak {peak64:.1f} GFLOP/s f64, {peak32:.1f} GFLOP/s f32 — 2048² jnp.dot)")
+    for scenario, rows in seconds.items():
+        ref_ll = lls[scenario]["ours_vmap_f64"]
+        base = rows["ours_vmap_f64"]
+        print(f"\n[{scenario}]  {'wall s':>10}{'× ours f64':>12}{'GFLOP/s':>10}{'max rel. Δ loglik':>19}")
+        for name, sec in rows.items():
+            if scenario == "shared_model" and not name.startswith("numpy_vectorised") \
+                    and not name.startswith("filterpy"):
+                flops = shared_step_flops() * work + generic_step_flops() * steps  # covariances once
+            else:
+                flops = generic_step_flops() * work
+            v = lls[scenario][name]
+            diff = float(np.max(np.abs(v - ref_ll[: len(v)]) / np.abs(ref_ll[: len(v)])))
+            out[f"{scenario}/{name}_gflops"] = flops / sec / 1e9
+            out[f"{scenario}/{name}_max_rel_loglik_diff"] = diff
+            print(f"  {name:<24}{sec:>10.3f}{sec / base:>12.2f}{flops / sec / 1e9:>10.2f}{diff:>19.1e}")
+        ratios = {k: v / base for k, v in rows.items() if not k.startswith("ours")}
+        out[f"{scenario}/ratios_vs_ours_f64"] = ratios
+        print("  speed-up of ours (vmap, float64): " + ", ".join(f"{v:.1f}× vs {k}" for k, v in ratios.items()))
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump(out, fh, indent=2)
+            json.dump(out, fh, indent=2, default=float)
     return out
 
 
