@@ -2,26 +2,31 @@
 
 Model: planar constant-velocity target (state ``[x, vx, y, vy]``, ``dt = 1 s``, white-acceleration
 process noise ``q = 0.1``), position measurements with ``σ = 1``.  Every run gets its own noise
-draw; every implementation computes each run's total log-likelihood (so all do the same work:
-filtered moments every step, one number per run kept).
+draw (generated in float64, cast for the float32 rows); every implementation computes each run's
+total log-likelihood, so all do the same filtering work and keep one number per run.
 
-Rows:
+Two scenarios:
 
-* ours, generic: ``jit(vmap(kalman_filter))`` (Joseph form, every run carries its own covariance),
-  float64 and float32, the batch in chunks of ``--chunk`` runs, all ``--runs`` runs timed;
-* ours, shared gain: :mod:`jaxsim.estimation.shared_gain` — the covariance recursion once, then
-  only the means per run (exact for runs sharing the model and the measurement schedule);
-* dynamax ``vmap(lgssm_filter)`` (float64; jitted; on ``--dynamax-runs`` runs, extrapolated);
-* a NumPy filter vectorised over runs (per-run covariances, ``np.matmul`` on ``(N, 4, 4)`` stacks),
-  and its shared-gain twin (on subsets, extrapolated);
-* FilterPy ``KalmanFilter`` in a Python loop (``--filterpy-runs`` runs, extrapolated).
+* ``shared_model`` (the issue's benchmark): all runs share the model.  The covariance recursion
+  does not depend on the data, and ``vmap`` leaves it unbatched — JAX computes it once per step
+  for all runs (dynamax's ``vmap`` gets the same benefit); :mod:`jaxsim.estimation.shared_gain`
+  does it explicitly.  Rows: ours ``jit(vmap(kalman_filter))`` (Joseph form) and shared-gain, in
+  float64 and float32, on all runs in chunks of ``--chunk``; dynamax ``jit(vmap(lgssm_filter))``;
+  a NumPy filter vectorised over runs (per-run covariance stacks) and its shared-gain twin;
+  FilterPy's ``KalmanFilter`` in a Python loop.
+* ``per_run_model``: run ``i`` uses ``R·sᵢ`` (``sᵢ`` log-uniform in [0.5, 2]), so every run carries
+  its own covariance recursion (a sweep over a model parameter).  Rows: ours, dynamax, NumPy.
 
-GFLOP/s = (analytic flop count of one filter step, a multiply-add counted as 2) × steps × runs /
-wall time; it is printed next to the machine's measured matmul peak (median time of a
-``2048 × 2048`` ``jnp.dot``, ``2n³`` flops).  Timings: median of ``--repeats`` runs after a warm-up.
+Peers run on subsets (``--dynamax-runs``, ``--numpy-runs``, ``--filterpy-runs``: the first runs
+of the first chunk) and are extrapolated linearly to all runs.  GFLOP/s = analytic flops of the
+work done (one Joseph-form step = :func:`generic_step_flops` per run and step; in the shared
+scenario the vmapped/shared-gain rows do :func:`shared_step_flops` per run and step plus one
+covariance step per step), a multiply-add counted as 2 — divided by the wall time; printed next
+to the machine's matmul peak measured as the median time of a ``2048 × 2048`` ``jnp.dot``
+(``2n³`` flops).  Timings: median of ``--repeats`` after a compiling call.
 
 Usage: ``python -m experiments.benchmarks.kalman_filter [--runs 100000] [--steps 1000] [--json F]``
-(``XLA_FLAGS=--xla_force_host_platform_device_count=2`` to shard the batch over two CPU cores).
+(``XLA_FLAGS=--xla_force_host_platform_device_count=2`` shards each chunk over two CPU devices).
 """
 
 from __future__ import annotations

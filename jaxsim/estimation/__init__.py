@@ -6,7 +6,9 @@ Modules (one idea each): :mod:`~.kalman` (predict/update, Joseph and square-root
 :mod:`~.lgssm` (model + scanned filter, masking, gating), :mod:`~.steady_state`,
 :mod:`~.kalman_bucy`, :mod:`~.ekf`, :mod:`~.ukf`, :mod:`~.cubature`, :mod:`~.smoothers`,
 :mod:`~.parallel`, :mod:`~.gating`, :mod:`~.imm`, :mod:`~.mmae`, :mod:`~.particle`,
-:mod:`~.alpha_beta`, :mod:`~.observers`, :mod:`~.allan`, :mod:`~.adapters`.
+:mod:`~.alpha_beta`, :mod:`~.observers`, :mod:`~.allan`, :mod:`~.shared_gain` (Monte Carlo
+with one covariance recursion), :mod:`~.linalg` (unrolled small-matrix factorisations),
+:mod:`~.filtering` (the shared scan loop), :mod:`~.adapters` (closed-loop ``Estimator``).
 """
 
 from jaxsim.estimation.adapters import ekf_estimator, kalman_estimator, luenberger_estimator, ukf_estimator
@@ -85,6 +87,7 @@ from jaxsim.estimation.particle import (
     stratified_resample,
     systematic_resample,
 )
+from jaxsim.estimation.shared_gain import CovarianceSequence, MeanFilterResult, covariance_sequence, mean_filter
 from jaxsim.estimation.smoothers import (
     extended_rts_smoother,
     rts_backward,
@@ -105,5 +108,5 @@ from jaxsim.estimation.ukf import (
 
 __all__ = [name for name in dir() if not name.startswith("_") and name not in {
     "adapters", "allan", "alpha_beta", "cubature", "ekf", "filtering", "gating", "imm", "kalman",
-    "kalman_bucy", "lgssm", "mmae", "nonlinear", "observers", "parallel", "particle", "smoothers",
+    "kalman_bucy", "lgssm", "linalg", "shared_gain", "mmae", "nonlinear", "observers", "parallel", "particle", "smoothers",
     "steady_state", "types", "ukf"}]

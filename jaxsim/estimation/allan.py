@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import Any, NamedTuple, Sequence
 
-
+import jax
 import jax.numpy as jnp
 import numpy as np
 

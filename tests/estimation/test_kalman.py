@@ -221,3 +221,18 @@ def test_shared_gain_filter_equals_full_filter_for_every_run():
         np.testing.assert_allclose(runs.means[i], ref.means, rtol=1e-11, atol=1e-12)
         np.testing.assert_allclose(runs.log_likelihood[i], ref.log_likelihood, rtol=1e-12)
     np.testing.assert_allclose(seq.covs, ref.covs, rtol=1e-12)
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 4, 6])
+def test_unrolled_small_linalg_equals_lapack(k):
+    from jaxsim.estimation import linalg
+
+    rng = np.random.default_rng(9 + k)
+    a = rng.standard_normal((k, k))
+    s = a @ a.T + 0.5 * np.eye(k)
+    b, bm = rng.standard_normal(k), rng.standard_normal((k, 3))
+    low = np.linalg.cholesky(s)
+    np.testing.assert_allclose(linalg.cholesky(jnp.asarray(s)), low, rtol=1e-12, atol=1e-13)
+    np.testing.assert_allclose(linalg.solve_lower(jnp.asarray(low), b), np.linalg.solve(low, b), rtol=1e-10)
+    np.testing.assert_allclose(linalg.cho_solve(jnp.asarray(low), bm), np.linalg.solve(s, bm), rtol=1e-9)
+    np.testing.assert_allclose(linalg.matmul(jnp.asarray(a), jnp.asarray(bm)), a @ bm, rtol=1e-12, atol=1e-13)
