@@ -11,14 +11,15 @@ Two scenarios:
   does not depend on the data, and ``vmap`` leaves it unbatched — JAX computes it once per step
   for all runs (dynamax's ``vmap`` gets the same benefit); :mod:`jaxsim.estimation.shared_gain`
   does it explicitly.  Rows: ours ``jit(vmap(kalman_filter))`` (Joseph form) and shared-gain, in
-  float64 and float32, on all runs in chunks of ``--chunk``; dynamax ``jit(vmap(lgssm_filter))``;
+  float64 and float32, and dynamax ``jit(vmap(lgssm_filter))`` (float64), all on every run in
+  chunks of ``--chunk`` runs;
   a NumPy filter vectorised over runs (per-run covariance stacks) and its shared-gain twin;
   FilterPy's ``KalmanFilter`` in a Python loop.
 * ``per_run_model``: run ``i`` uses ``R·sᵢ`` (``sᵢ`` log-uniform in [0.5, 2]), so every run carries
   its own covariance recursion (a sweep over a model parameter).  Rows: ours, dynamax, NumPy.
 
-Peers run on subsets (``--dynamax-runs``, ``--numpy-runs``, ``--filterpy-runs``: the first runs
-of the first chunk) and are extrapolated linearly to all runs.  GFLOP/s = analytic flops of the
+NumPy and FilterPy run on subsets (``--numpy-runs``, ``--filterpy-runs``: the first runs of the
+first chunk) and are extrapolated linearly to all runs.  GFLOP/s = analytic flops of the
 work done (one Joseph-form step = :func:`generic_step_flops` per run and step; in the shared
 scenario the vmapped/shared-gain rows do :func:`shared_step_flops` per run and step plus one
 covariance step per step), a multiply-add counted as 2 — divided by the wall time; printed next
@@ -222,9 +223,8 @@ def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--runs", type=int, default=100_000)
     ap.add_argument("--steps", type=int, default=1000)
-    ap.add_argument("--chunk", type=int, default=10_000, help="runs per jitted call (memory bound)")
+    ap.add_argument("--chunk", type=int, default=2000, help="runs per jitted call (JAX rows, dynamax too)")
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--dynamax-runs", type=int, default=2000)
     ap.add_argument("--numpy-runs", type=int, default=1000)
     ap.add_argument("--filterpy-runs", type=int, default=3)
     ap.add_argument("--json", default=None)
@@ -232,7 +232,7 @@ def main(argv=None) -> dict:
     runs, steps = args.runs, args.steps
     chunk = min(args.chunk, runs)
     work = steps * runs
-    n_sub = max(args.dynamax_runs, args.numpy_runs, args.filterpy_runs)
+    n_sub = max(args.numpy_runs, args.filterpy_runs)
     if n_sub > chunk:
         ap.error(f"the peers' subsets ({n_sub} runs) must fit in one chunk ({chunk})")
     out: dict = {"runs": runs, "steps": steps, "chunk": chunk, "devices": str(jax.devices()),
@@ -243,7 +243,7 @@ def main(argv=None) -> dict:
     seconds: dict[str, dict[str, float]] = {"shared_model": {}, "per_run_model": {}}
     lls: dict[str, dict[str, np.ndarray]] = {"shared_model": {}, "per_run_model": {}}
 
-    def ours(scenario, name, fn, dtype, with_scales=False):
+    def ours(scenario, name, fn, dtype, with_scales=False):  # all runs, chunk by chunk
         t, ll, first = time_sweep(fn, runs, chunk, steps, dtype, args.repeats,
                                   scales if with_scales else None)
         seconds[scenario][name], lls[scenario][name] = t, ll
@@ -259,10 +259,7 @@ def main(argv=None) -> dict:
     ours("shared_model", "ours_shared_gain_f64", ours_shared(model64, steps), jnp.float64)
     ours("shared_model", "ours_shared_gain_f32", ours_shared(model32, steps), jnp.float32)
     try:
-        dyn = dynamax_fn(model64)
-        y_dyn = jnp.asarray(sub_y[: args.dynamax_runs])
-        dyn(y_dyn).block_until_ready()
-        peer("shared_model", "dynamax_vmap_f64", lambda: dyn(y_dyn).block_until_ready(), args.dynamax_runs)
+        ours("shared_model", "dynamax_vmap_f64", dynamax_fn(model64), jnp.float64)
     except ImportError:
         out["dynamax"] = "not installed"
     y_np = sub_y[: args.numpy_runs]
@@ -277,17 +274,14 @@ def main(argv=None) -> dict:
     ours("per_run_model", "ours_vmap_f64", ours_per_run(model64), jnp.float64, True)
     ours("per_run_model", "ours_vmap_f32", ours_per_run(model32), jnp.float32, True)
     if "dynamax" not in out:
-        dyn2 = dynamax_fn(model64, per_run=True)
-        s_dyn = jnp.asarray(scales[: args.dynamax_runs])
-        dyn2(y_dyn, s_dyn).block_until_ready()
-        peer("per_run_model", "dynamax_vmap_f64", lambda: dyn2(y_dyn, s_dyn).block_until_ready(), args.dynamax_runs)
+        ours("per_run_model", "dynamax_vmap_f64", dynamax_fn(model64, per_run=True), jnp.float64, True)
     peer("per_run_model", "numpy_vectorised", lambda: numpy_filter(model64, y_np, scales[: args.numpy_runs]),
          args.numpy_runs)
 
     peak64, peak32 = matmul_peak(jnp.float64), matmul_peak(jnp.float32)
     out.update(matmul_peak_gflops_f64=peak64, matmul_peak_gflops_f32=peak32, seconds=seconds)
     print(f"Kalman filter 4 states / 2 measurements, {steps} steps × {runs} runs; devices {out['devices']}")
-    print(f"(peers timed on subsets and extrapolated linearly; medians of {args.repeats}; "
+    print(f"(NumPy and FilterPy timed on subsets and extrapolated linearly; medians of {args.repeats}; "
           f"matmul peak {peak64:.1f} GFLOP/s f64, {peak32:.1f} GFLOP/s f32 — 2048² jnp.dot)")
     for scenario, rows in seconds.items():
         ref_ll = lls[scenario]["ours_vmap_f64"]
