@@ -70,3 +70,26 @@ def check_square(name: str, m: Any) -> None:
     shape = np.shape(m)
     if len(shape) != 2 or shape[0] != shape[1]:
         raise ValueError(f"{name}: expected a square matrix, got shape {tuple(shape)}")
+
+
+def check_covariance(name: str, m: Any, n: int | None = None, *, rtol: float = 1e-8) -> None:
+    """Require a symmetric positive semi-definite ``(n, n)`` matrix (or a stack ``(..., n, n)``).
+
+    Shape is always checked; symmetry (to ``rtol`` of the largest entry) and the sign of the
+    smallest eigenvalue (≥ ``−rtol·max|λ|``) only when ``m`` is concrete.
+    """
+    shape = tuple(np.shape(m))
+    if len(shape) < 2 or shape[-1] != shape[-2] or (n is not None and shape[-1] != n):
+        want = "(n, n)" if n is None else f"({n}, {n})"
+        raise ValueError(f"{name}: expected a covariance of shape {want}, got {shape}")
+    check_finite(name, m)
+    if not is_concrete(m):
+        return
+    arr = np.asarray(m, dtype=float)
+    scale = max(float(np.max(np.abs(arr), initial=0.0)), np.finfo(float).tiny)
+    asym = float(np.max(np.abs(arr - np.swapaxes(arr, -1, -2)), initial=0.0))
+    if asym > rtol * scale:
+        raise ValueError(f"{name}: must be symmetric (max |M − Mᵀ| = {asym:.3g})")
+    eig = np.linalg.eigvalsh(arr)
+    if float(np.min(eig)) < -rtol * max(float(np.max(np.abs(eig))), np.finfo(float).tiny):
+        raise ValueError(f"{name}: must be positive semi-definite (smallest eigenvalue {float(np.min(eig)):.3g})")

@@ -1,1 +1,114 @@
-"""State and fault estimation kernels (filters, observers, predictors)."""
+"""Estimation kernels: Kalman family, smoothers, multiple models, particle filters, α–β, observers,
+Allan variance.  Every kernel is a pure JAX function (jit, vmap, grad, lax.scan); filters come as
+step functions (online use) and scanned runs (batched use) built from the same steps.
+
+Modules (one idea each): :mod:`~.kalman` (predict/update, Joseph and square-root),
+:mod:`~.lgssm` (model + scanned filter, masking, gating), :mod:`~.steady_state`,
+:mod:`~.kalman_bucy`, :mod:`~.ekf`, :mod:`~.ukf`, :mod:`~.cubature`, :mod:`~.smoothers`,
+:mod:`~.parallel`, :mod:`~.gating`, :mod:`~.imm`, :mod:`~.mmae`, :mod:`~.particle`,
+:mod:`~.alpha_beta`, :mod:`~.observers`, :mod:`~.allan`, :mod:`~.shared_gain` (Monte Carlo
+with one covariance recursion), :mod:`~.linalg` (unrolled small-matrix factorisations),
+:mod:`~.filtering` (the shared scan loop), :mod:`~.adapters` (closed-loop ``Estimator``);
+imported by full path: :mod:`~.reduced_order_smo` (the fault-identification observer of seed 000,
+paper 2) and :mod:`~.hankel_predictor` (seed 000, paper 6).
+"""
+
+from jaxsim.estimation.adapters import ekf_estimator, kalman_estimator, luenberger_estimator, ukf_estimator
+from jaxsim.estimation.allan import AllanResult, allan_variance, cluster_sizes, random_walk_avar, white_noise_avar
+from jaxsim.estimation.alpha_beta import (
+    AlphaBetaResult,
+    alpha_beta_filter,
+    alpha_beta_update,
+    benedict_bordner_beta,
+    growing_memory_filter,
+    growing_memory_gains,
+    poly_window_weights,
+    sliding_window_fit,
+    window_bank,
+)
+from jaxsim.estimation.cubature import CubaturePoints, cubature_kalman_filter
+from jaxsim.estimation.ekf import ekf_predict, ekf_update, extended_kalman_filter
+from jaxsim.estimation.gating import chi2_bounds, chi2_gate, chi2_threshold, fraction_inside, nees, nis
+from jaxsim.estimation.imm import (
+    IMM,
+    FilterMember,
+    IMMResult,
+    IMMState,
+    ekf_member,
+    imm,
+    imm_estimate,
+    imm_filter,
+    imm_init,
+    imm_predict,
+    imm_update,
+    linear_member,
+    ukf_member,
+)
+from jaxsim.estimation.kalman import condition, predict, sqrt_predict, sqrt_update, update
+from jaxsim.estimation.kalman_bucy import (
+    continuous_discrete_predict,
+    kalman_bucy_derivative,
+    kalman_bucy_step,
+    steady_state_kalman_bucy,
+)
+from jaxsim.estimation.lgssm import LinearGaussianSSM, kalman_filter, lgssm, sample
+from jaxsim.estimation.mmae import (
+    BankResult,
+    SPRTResult,
+    bank_filter,
+    bank_posterior,
+    sprt,
+    sprt_bank_size,
+    sprt_thresholds,
+    wald_asn,
+)
+from jaxsim.estimation.nonlinear import NonlinearSSM, nonlinear_ssm
+from jaxsim.estimation.observers import (
+    ackermann,
+    current_observer_gain,
+    low_pass,
+    luenberger_gain,
+    luenberger_step,
+    place_poles,
+    sliding_mode_injection,
+    sliding_mode_observer_derivative,
+    switching,
+)
+from jaxsim.estimation.parallel import parallel_kalman_filter, parallel_rts_smoother
+from jaxsim.estimation.particle import (
+    ParticleModel,
+    ParticleResult,
+    ParticleState,
+    bootstrap_filter,
+    effective_sample_size,
+    multinomial_resample,
+    particle_model_from_lgssm,
+    pf_init,
+    pf_step,
+    resample,
+    stratified_resample,
+    systematic_resample,
+)
+from jaxsim.estimation.shared_gain import CovarianceSequence, MeanFilterResult, covariance_sequence, mean_filter
+from jaxsim.estimation.smoothers import (
+    extended_rts_smoother,
+    rts_backward,
+    rts_smoother,
+    sigma_point_rts_smoother,
+    unscented_rts_smoother,
+)
+from jaxsim.estimation.steady_state import SteadyStateKalman, steady_state_kalman
+from jaxsim.estimation.types import FilterResult, GaussianState, Innovation, SmootherResult, SqrtGaussianState
+from jaxsim.estimation.ukf import (
+    MerweScaledSigmaPoints,
+    sigma_point_filter,
+    ukf_predict,
+    ukf_update,
+    unscented_kalman_filter,
+    unscented_transform,
+)
+
+__all__ = [name for name in dir() if not name.startswith("_") and name not in {
+    "adapters", "allan", "alpha_beta", "cubature", "ekf", "filtering", "gating", "imm", "kalman",
+    "kalman_bucy", "lgssm", "linalg", "shared_gain", "mmae", "nonlinear", "observers", "parallel", "particle", "smoothers",
+    "steady_state", "types", "ukf"}]

@@ -1,0 +1,194 @@
+"""Interacting multiple model (IMM) estimator with linear, EKF or UKF members.
+
+``transition[i, j] = P(mode_{t+1} = j | mode_t = i)`` (rows sum to one; FilterPy's ``M``).  One cycle:
+
+* :func:`imm_predict` — mixing ``c̄_j = Σᵢ Πᵢⱼ μᵢ``, ``ωᵢⱼ = Πᵢⱼ μᵢ / c̄_j``; every member starts
+  from its mixed belief ``m⁰ⱼ = Σᵢ ωᵢⱼ mᵢ``, ``P⁰ⱼ = Σᵢ ωᵢⱼ (Pᵢ + (mᵢ − m⁰ⱼ)(mᵢ − m⁰ⱼ)ᵀ)`` and
+  predicts; the mode probabilities become the predicted ``c̄``;
+* :func:`imm_update` — every member updates, ``μⱼ ∝ c̄ⱼ Λⱼ`` (``Λⱼ`` its innovation likelihood,
+  combined in log space);
+* :func:`imm_estimate` — the moment-matched mixture.
+
+Members may have different functions (constant-velocity and coordinated-turn models, say); they
+are unrolled over the (static) number of members, each a :class:`FilterMember`.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxsim.core.pytree import pytree_dataclass, static_field
+from jaxsim.core.validation import check_finite
+from jaxsim.estimation import kalman
+from jaxsim.estimation.ekf import ekf_predict, ekf_update
+from jaxsim.estimation.lgssm import prepare_measurements
+from jaxsim.estimation.nonlinear import NonlinearSSM
+from jaxsim.estimation.types import GaussianState, Innovation
+from jaxsim.estimation.ukf import MerweScaledSigmaPoints, ukf_predict, ukf_update
+
+
+@pytree_dataclass
+class FilterMember:
+    """One model of a bank: ``predict(params, state, u) -> state`` and
+    ``update(params, state, y, mask) -> (state, Innovation)`` with its parameters."""
+
+    params: Any
+    predict: Callable[[Any, GaussianState, Any], GaussianState] = static_field()
+    update: Callable[[Any, GaussianState, jax.Array, jax.Array], tuple[GaussianState, Innovation]] = static_field()
+
+
+def _linear_predict(p, state, u):
+    return kalman.predict(state, p["F"], p["Q"], p.get("B"), u)
+
+
+def _linear_update(p, state, y, mask):
+    return kalman.update(state, y, p["H"], p["R"], mask=mask)
+
+
+def linear_member(F: Any, Q: Any, H: Any, R: Any, B: Any = None) -> FilterMember:
+    """A Kalman-filter member with matrices ``F (n, n)``, ``Q``, ``H (p, n)``, ``R``, ``B (n, m)``."""
+    params = {"F": jnp.asarray(F), "Q": jnp.asarray(Q), "H": jnp.asarray(H), "R": jnp.asarray(R)}
+    if B is not None:
+        params["B"] = jnp.asarray(B)
+    return FilterMember(params, _linear_predict, _linear_update)
+
+
+def _ekf_predict(model, state, u):
+    return ekf_predict(state, lambda x: model.f(x, u), model.Q)
+
+
+def _ekf_update(model, state, y, mask):
+    return ekf_update(state, y, model.h, model.R, mask=mask)
+
+
+def ekf_member(model: NonlinearSSM) -> FilterMember:
+    """An EKF member from a :class:`~jaxsim.estimation.nonlinear.NonlinearSSM` (its ``m0, P0`` unused)."""
+    return FilterMember(model, _ekf_predict, _ekf_update)
+
+
+def _ukf_predict(p, state, u):
+    model, scheme = p
+    return ukf_predict(state, lambda x: model.f(x, u), model.Q, scheme)
+
+
+def _ukf_update(p, state, y, mask):
+    model, scheme = p
+    return ukf_update(state, y, model.h, model.R, scheme, mask=mask)
+
+
+def ukf_member(model: NonlinearSSM, alpha: float = 1.0, beta: float = 2.0, kappa: float = 0.0) -> FilterMember:
+    """A UKF member (Merwe scaled sigma points)."""
+    return FilterMember((model, MerweScaledSigmaPoints(alpha, beta, kappa)), _ukf_predict, _ukf_update)
+
+
+@pytree_dataclass
+class IMM:
+    """Members (a tuple of :class:`FilterMember`) and the mode transition matrix ``(M, M)``."""
+
+    members: tuple
+    transition: jax.Array
+
+
+class IMMState(NamedTuple):
+    """Member beliefs ``means (M, n)``, ``covs (M, n, n)`` and mode probabilities ``probs (M,)``."""
+
+    means: jax.Array
+    covs: jax.Array
+    probs: jax.Array
+
+
+class IMMResult(NamedTuple):
+    """Scanned IMM: combined ``means (T, n)``, ``covs (T, n, n)``, ``mode_probs (T, M)``, member
+    ``member_means (T, M, n)``, ``member_covs (T, M, n, n)``, per-step and total log-likelihood."""
+
+    means: jax.Array
+    covs: jax.Array
+    mode_probs: jax.Array
+    member_means: jax.Array
+    member_covs: jax.Array
+    log_likelihoods: jax.Array
+    log_likelihood: jax.Array
+
+
+def imm(members: Any, transition: Any) -> IMM:
+    """Build an :class:`IMM`; checks that ``transition`` is ``(M, M)`` row-stochastic."""
+    members = tuple(members)
+    pi = jnp.asarray(transition)
+    k = len(members)
+    if pi.shape != (k, k):
+        raise ValueError(f"transition: expected shape ({k}, {k}) for {k} members, got {tuple(pi.shape)}")
+    check_finite("transition", pi)
+    arr = np.asarray(pi)
+    if np.any(arr < 0) or not np.allclose(arr.sum(axis=1), 1.0, atol=1e-10):
+        raise ValueError("transition: rows must be probabilities summing to 1")
+    return IMM(members, pi)
+
+
+def imm_init(means: Any, covs: Any, probs: Any) -> IMMState:
+    """Initial state: ``means (M, n)``, ``covs (M, n, n)``, ``probs (M,)`` (non-negative, sum 1)."""
+    means, covs, probs = jnp.asarray(means), jnp.asarray(covs), jnp.asarray(probs)
+    if means.ndim != 2 or covs.shape != means.shape + means.shape[-1:] or probs.shape != means.shape[:1]:
+        raise ValueError(
+            f"means, covs, probs: expected shapes (M, n), (M, n, n), (M,), got "
+            f"{tuple(means.shape)}, {tuple(covs.shape)}, {tuple(probs.shape)}"
+        )
+    return IMMState(means, covs, probs)
+
+
+def _mix(state: IMMState, pi: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
+    cbar = state.probs @ pi
+    omega = pi * state.probs[:, None] / cbar[None, :]  # ω[i, j]
+    mixed_means = omega.T @ state.means
+    d = state.means[None, :, :] - mixed_means[:, None, :]  # [j, i, :]
+    mixed_covs = jnp.einsum("ij,jikl->jkl", omega, state.covs[None] + d[..., :, None] * d[..., None, :])
+    return mixed_means, mixed_covs, cbar
+
+
+def imm_predict(model: IMM, state: IMMState, u: Any = None) -> IMMState:
+    """Mix the member beliefs, predict each member, and carry the predicted mode probabilities."""
+    mixed_means, mixed_covs, cbar = _mix(state, model.transition)
+    preds = [mem.predict(mem.params, GaussianState(mixed_means[j], mixed_covs[j]), u)
+             for j, mem in enumerate(model.members)]
+    return IMMState(jnp.stack([p.mean for p in preds]), jnp.stack([p.cov for p in preds]), cbar)
+
+
+def imm_update(model: IMM, state: IMMState, y: jax.Array, mask: Any = None) -> tuple[IMMState, jax.Array]:
+    """Update every member with ``y (p,)``; returns the new state and ``log p(y | past)``."""
+    m = kalman.full_mask(y.shape[0], mask)
+    outs = [mem.update(mem.params, GaussianState(state.means[j], state.covs[j]), y, m)
+            for j, mem in enumerate(model.members)]
+    ll = jnp.stack([o[1].log_likelihood for o in outs])
+    log_joint = jnp.log(state.probs) + ll
+    total = jax.scipy.special.logsumexp(log_joint)
+    probs = jnp.exp(log_joint - total)
+    new = IMMState(jnp.stack([o[0].mean for o in outs]), jnp.stack([o[0].cov for o in outs]), probs)
+    return new, total
+
+
+def imm_estimate(state: IMMState) -> GaussianState:
+    """The combined (moment-matched) estimate ``Σ μⱼ mⱼ`` and its covariance."""
+    mean = state.probs @ state.means
+    d = state.means - mean
+    cov = jnp.einsum("j,jkl->kl", state.probs, state.covs + d[:, :, None] * d[:, None, :])
+    return GaussianState(mean, cov)
+
+
+def imm_filter(
+    model: IMM, init: IMMState, y: Any, u: Any = None, *, mask: Any = None, missing: str = "error"
+) -> IMMResult:
+    """Scanned IMM over ``y (T, p)``: ``init`` is the belief before ``y_0``; update, then predict."""
+    y, m = prepare_measurements(y, np.shape(y)[-1], mask, missing)
+    u = None if u is None else jnp.asarray(u)
+
+    def step(state, x):
+        y_t, m_t, u_t = x
+        post, ll = imm_update(model, state, y_t, m_t)
+        est = imm_estimate(post)
+        return imm_predict(model, post, u_t), (est.mean, est.cov, post.probs, post.means, post.covs, ll)
+
+    _, (means, covs, probs, mm, mc, ll) = jax.lax.scan(step, init, (y, m, u))
+    return IMMResult(means, covs, probs, mm, mc, ll, jnp.sum(ll))

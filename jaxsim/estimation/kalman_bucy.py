@@ -1,0 +1,127 @@
+"""Continuous-time and continuous–discrete Kalman filtering.
+
+Model ``dx = (A x + B u) dt + G dw``, ``E[dw dwᵀ] = Q_c dt``.
+
+* Continuous–discrete (samples at discrete times): between samples the moments obey
+  ``ṁ = A m + B u``, ``Ṗ = A P + P Aᵀ + G Q_c Gᵀ``; :func:`continuous_discrete_predict` integrates
+  them with a fixed-step solver (RK4 by default) and the update is the discrete one.  For an LTI
+  model it reproduces ``c2d_zoh``/``van_loan`` to the solver's order.
+* Kalman–Bucy (continuous measurement ``dz = C x dt + dv``, ``E[dv dvᵀ] = R_c dt``):
+  ``ṁ = A m + B u + K (y − C m)``, ``K = P Cᵀ R_c⁻¹``, ``Ṗ = A P + P Aᵀ + G Q_c Gᵀ − P Cᵀ R_c⁻¹ C P``
+  (:func:`kalman_bucy_derivative`, :func:`kalman_bucy_step`);
+  its stationary covariance solves the filter CARE, :func:`steady_state_kalman_bucy` (matrix sign
+  function of the Hamiltonian, Newton iteration with determinant scaling).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+
+from jaxsim.core.integrators import RK4, Solver
+from jaxsim.core.validation import check_covariance, check_finite, check_square
+from jaxsim.estimation.kalman import symmetrize
+from jaxsim.estimation.types import GaussianState
+
+
+def _gqg(Qc: jax.Array, G: jax.Array | None) -> jax.Array:
+    return Qc if G is None else G @ Qc @ G.T
+
+
+def _integrate(solver: Solver, field, z: jax.Array, dt: Any, substeps: int) -> jax.Array:
+    h = jnp.asarray(dt) / substeps
+    return jax.lax.fori_loop(0, substeps, lambda i, x: solver.step(field, i * h, x, h), z)
+
+
+def continuous_discrete_predict(
+    state: GaussianState,
+    A: jax.Array,
+    Qc: jax.Array,
+    dt: Any,
+    *,
+    B: jax.Array | None = None,
+    u: jax.Array | None = None,
+    G: jax.Array | None = None,
+    substeps: int = 10,
+    solver: Solver = RK4,
+) -> GaussianState:
+    """Integrate ``ṁ = A m + B u``, ``Ṗ = A P + P Aᵀ + G Q_c Gᵀ`` over ``dt`` (``u`` held)."""
+    n = state.mean.shape[0]
+    gqg = _gqg(Qc, G)
+    bu = jnp.zeros((n,), state.mean.dtype) if B is None or u is None else B @ u
+
+    def field(_, z):
+        m, P = z[:n], z[n:].reshape(n, n)
+        return jnp.concatenate([A @ m + bu, (A @ P + P @ A.T + gqg).ravel()])
+
+    z = _integrate(solver, field, jnp.concatenate([state.mean, state.cov.ravel()]), dt, substeps)
+    return GaussianState(z[:n], symmetrize(z[n:].reshape(n, n)))
+
+
+def kalman_bucy_derivative(
+    state: GaussianState, y: jax.Array, A: jax.Array, C: jax.Array, Qc: jax.Array, Rc: jax.Array,
+    *, B: jax.Array | None = None, u: jax.Array | None = None, G: jax.Array | None = None,
+) -> GaussianState:
+    """``(ṁ, Ṗ)`` of the Kalman–Bucy filter for the measured signal ``y (p,)``."""
+    m, P = state
+    k = jnp.linalg.solve(Rc, C @ P).T
+    dm = A @ m + k @ (y - C @ m)
+    if B is not None and u is not None:
+        dm = dm + B @ u
+    dP = A @ P + P @ A.T + _gqg(Qc, G) - k @ Rc @ k.T
+    return GaussianState(dm, symmetrize(dP))
+
+
+def kalman_bucy_step(
+    state: GaussianState, y: jax.Array, A: jax.Array, C: jax.Array, Qc: jax.Array, Rc: jax.Array,
+    dt: Any, *, B: jax.Array | None = None, u: jax.Array | None = None, G: jax.Array | None = None,
+    substeps: int = 1, solver: Solver = RK4,
+) -> GaussianState:
+    """Advance the Kalman–Bucy filter by ``dt`` with ``y`` and ``u`` held."""
+    n = state.mean.shape[0]
+
+    def field(_, z):
+        d = kalman_bucy_derivative(GaussianState(z[:n], z[n:].reshape(n, n)), y, A, C, Qc, Rc, B=B, u=u, G=G)
+        return jnp.concatenate([d.mean, d.cov.ravel()])
+
+    z = _integrate(solver, field, jnp.concatenate([state.mean, state.cov.ravel()]), dt, substeps)
+    return GaussianState(z[:n], symmetrize(z[n:].reshape(n, n)))
+
+
+def _matrix_sign(z: jax.Array, iterations: int) -> jax.Array:
+    n = z.shape[0]
+
+    def body(_, s):
+        c = jnp.abs(jnp.linalg.det(s)) ** (-1.0 / n)
+        return 0.5 * (c * s + jnp.linalg.inv(s) / c)
+
+    return jax.lax.fori_loop(0, iterations, body, z)
+
+
+def steady_state_kalman_bucy(
+    A: Any, C: Any, Qc: Any, Rc: Any, *, G: Any = None, iterations: int = 60
+) -> tuple[jax.Array, jax.Array]:
+    """Stationary ``(P, K)`` of the Kalman–Bucy filter: ``A P + P Aᵀ + G Q_c Gᵀ − P Cᵀ R_c⁻¹ C P = 0``,
+    ``K = P Cᵀ R_c⁻¹``.  Requires ``(A, C)`` detectable and ``(A, G Q_c^{1/2})`` stabilisable."""
+    A, C, Qc, Rc = (jnp.asarray(v) for v in (A, C, Qc, Rc))
+    check_square("A", A)
+    n = A.shape[0]
+    if C.ndim != 2 or C.shape[1] != n:
+        raise ValueError(f"C: expected shape (p, {n}), got {tuple(C.shape)}")
+    check_finite("A", A)
+    check_finite("C", C)
+    G = None if G is None else jnp.asarray(G)
+    gqg = _gqg(Qc, G)
+    check_covariance("Qc", Qc)
+    check_covariance("Rc", Rc, C.shape[0])
+    # Hamiltonian of the dual control CARE: X Aᵀ-form with (Aᵀ, Cᵀ).
+    s = C.T @ jnp.linalg.solve(Rc, C)
+    ham = jnp.block([[A.T, -s], [-gqg, -A]])
+    w = _matrix_sign(ham, iterations)
+    eye = jnp.eye(n, dtype=A.dtype)
+    lhs = jnp.concatenate([w[:n, n:], w[n:, n:] + eye], axis=0)
+    rhs = -jnp.concatenate([w[:n, :n] + eye, w[n:, :n]], axis=0)
+    P = symmetrize(jnp.linalg.lstsq(lhs, rhs)[0])
+    return P, jnp.linalg.solve(Rc, C @ P).T

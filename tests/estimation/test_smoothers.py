@@ -1,0 +1,90 @@
+"""RTS smoothers (FilterPy oracle), extended/unscented RTS, and the parallel-in-time twins."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from jaxsim.estimation.lgssm import kalman_filter
+from jaxsim.estimation.parallel import parallel_kalman_filter, parallel_rts_smoother
+from jaxsim.estimation.smoothers import extended_rts_smoother, rts_smoother, unscented_rts_smoother
+from tests.estimation.helpers import random_model, random_time_varying, simulate_np
+from tests.estimation.test_nonlinear import (
+    _filterpy_sigma_filter,
+    as_nonlinear,
+    pendulum_data,
+    pendulum_model,
+)
+
+
+def test_rts_matches_filterpy():
+    fk = pytest.importorskip("filterpy.kalman")
+    rng = np.random.default_rng(20)
+    model = random_model(rng, n=4, p=2)
+    _, y = simulate_np(model, rng, 30, None)
+    ours = rts_smoother(model, y)
+    kf = fk.KalmanFilter(dim_x=4, dim_z=2)
+    F, Q = np.asarray(model.F), np.asarray(model.Q)
+    kf.F, kf.Q, kf.H, kf.R = F, Q, np.asarray(model.H), np.asarray(model.R)
+    kf.x, kf.P = np.asarray(model.m0)[:, None].copy(), np.asarray(model.P0).copy()
+    xs, ps = [], []
+    for t in range(30):
+        kf.update(y[t][:, None])
+        xs.append(kf.x.copy())
+        ps.append(kf.P.copy())
+        kf.predict()
+    sx, sp, _, _ = kf.rts_smoother(np.array(xs), np.array(ps), [F] * 30, [Q] * 30)
+    np.testing.assert_allclose(ours.means, sx[:, :, 0], rtol=1e-9, atol=1e-10)
+    np.testing.assert_allclose(ours.covs, sp, rtol=1e-9, atol=1e-10)
+
+
+def test_unscented_rts_matches_filterpy():
+    y = pendulum_data(t=20, seed=3)
+    f, means, covs, _ = _filterpy_sigma_filter("ukf", y)
+    sx, sp, _ = f.rts_smoother(means, covs)
+    ours = unscented_rts_smoother(pendulum_model(), y, alpha=0.5, beta=2.0, kappa=1.0)
+    np.testing.assert_allclose(ours.means, sx, rtol=1e-9, atol=1e-10)
+    np.testing.assert_allclose(ours.covs, sp, rtol=1e-9, atol=1e-10)
+
+
+def test_extended_and_unscented_rts_equal_rts_on_linear_model():
+    rng = np.random.default_rng(21)
+    model = random_model(rng, n=3, p=2, m=1)
+    u = rng.standard_normal((15, 1))
+    _, y = simulate_np(model, rng, 15, u)
+    ref = rts_smoother(model, y, u)
+    nl = as_nonlinear(model)
+    for got in (extended_rts_smoother(nl, y, u), unscented_rts_smoother(nl, y, u, alpha=0.8)):
+        np.testing.assert_allclose(got.means, ref.means, rtol=1e-9, atol=1e-10)
+        np.testing.assert_allclose(got.covs, ref.covs, rtol=1e-9, atol=1e-10)
+
+
+def test_smoother_reduces_covariance_and_interpolates_a_gap():
+    rng = np.random.default_rng(22)
+    model = random_model(rng, n=3, p=1)
+    _, y = simulate_np(model, rng, 40, None)
+    mask = np.ones(40, bool)
+    mask[15:25] = False  # a rejected segment: the smoother bridges it
+    s = rts_smoother(model, y, mask=mask)
+    trace_s = np.trace(np.asarray(s.covs), axis1=1, axis2=2)
+    trace_f = np.trace(np.asarray(s.filtered.covs), axis1=1, axis2=2)
+    assert np.all(trace_s <= trace_f + 1e-12)
+    assert np.all(trace_s[15:25] < trace_f[15:25])
+
+
+@pytest.mark.parametrize("time_varying", [False, True])
+def test_parallel_equals_serial(time_varying):
+    rng = np.random.default_rng(23)
+    t = 33
+    model = random_time_varying(rng, t) if time_varying else random_model(rng, n=4, p=2, m=1)
+    u = rng.standard_normal((t, 1))
+    _, y = simulate_np(model, rng, t, u)
+    mask = rng.random((t, 2)) > 0.25
+    ser, par = kalman_filter(model, y, u, mask=mask), parallel_kalman_filter(model, y, u, mask=mask)
+    for field in ser._fields:
+        np.testing.assert_allclose(np.asarray(getattr(par, field), float), np.asarray(getattr(ser, field), float),
+                                   rtol=1e-9, atol=1e-10, err_msg=field)
+    ss, ps = rts_smoother(model, y, u, mask=mask), parallel_rts_smoother(model, y, u, mask=mask)
+    np.testing.assert_allclose(ps.means, ss.means, rtol=1e-9, atol=1e-10)
+    np.testing.assert_allclose(ps.covs, ss.covs, rtol=1e-9, atol=1e-10)
+    np.testing.assert_allclose(ps.gains, ss.gains, rtol=1e-9, atol=1e-10)
