@@ -25,6 +25,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxsim.core.switching import get_switch
 from jaxsim.core.validation import check_finite, check_square, is_concrete
 
 SWITCHING = ("sign", "fraction", "tanh", "saturation")
@@ -170,16 +171,11 @@ def switching(e: jax.Array, mode: str = "sign", epsilon: Any = 1e-3) -> jax.Arra
 
     ``"sign"``: exact ``sign(e)``; ``"fraction"``: ``e/(|e| + ε)``; ``"tanh"``: ``tanh(e/ε)``;
     ``"saturation"``: ``clip(e/ε, −1, 1)``.  All smooth forms tend to ``sign`` as ``ε → 0``.
+    Thin front end to :mod:`jaxsim.core.switching` ("fraction" is its "ratio").
     """
-    if mode == "sign":
-        return jnp.sign(e)
-    if mode == "fraction":
-        return e / (jnp.abs(e) + epsilon)
-    if mode == "tanh":
-        return jnp.tanh(e / epsilon)
-    if mode == "saturation":
-        return jnp.clip(e / epsilon, -1.0, 1.0)
-    raise ValueError(f"mode: expected one of {SWITCHING}, got {mode!r}")
+    if mode not in SWITCHING:
+        raise ValueError(f"mode: expected one of {SWITCHING}, got {mode!r}")
+    return get_switch("ratio" if mode == "fraction" else mode)(e, epsilon)
 
 
 def sliding_mode_injection(
