@@ -3,8 +3,10 @@
 ``(A, B)`` is stabilisable iff ``rank [A − λI, B] = n`` for every eigenvalue ``λ`` of ``A`` outside
 the open stability region (``Re λ ≥ 0`` in continuous time, ``|λ| ≥ 1`` in discrete time);
 ``(A, C)`` is detectable iff ``(Aᵀ, Cᵀ)`` is stabilisable.  The rank is judged by the smallest
-singular value of the PBH matrix relative to ``‖[A, B]‖₂``: below ``rtol`` (default 1e-8, about the
-accuracy of a computed eigenvalue of a 2×2 Jordan block) the mode counts as uncontrollable.
+singular value of ``[(A − λI)/‖A‖₂, B̂]`` where ``B̂`` is ``B`` with unit-norm columns (column
+scalings do not change the rank, and weights spanning many decades no longer hide behind the
+largest): below ``rtol`` (default 1e-8, about the accuracy of a computed eigenvalue of a 2×2
+Jordan block) the mode counts as uncontrollable.
 
 These checks run in NumPy at the public boundary only (they raise ``ValueError``); inside
 ``jit``/``vmap``/``grad`` the inputs are tracers and the solvers return NaN instead.
@@ -43,7 +45,11 @@ def uncontrollable_modes(
     a = np.asarray(a, dtype=complex)
     b = np.asarray(b, dtype=complex).reshape(a.shape[0], -1)
     n = a.shape[0]
-    scale = max(np.linalg.norm(np.hstack([a, b]), 2), np.finfo(float).tiny)
+    # Column scalings leave the PBH rank unchanged: unit-norm columns of B (so weights spanning
+    # many decades, e.g. Q = diag(1e8, 1), do not hide behind the largest) and A over its norm.
+    col = np.linalg.norm(b, axis=0)
+    b = b[:, col > 0] / col[col > 0]
+    a_scale = max(np.linalg.norm(a, 2), np.finfo(float).tiny)
     lam = np.linalg.eigvals(a)
     dist = (np.abs(lam) - 1.0) if discrete else lam.real  # signed distance to the boundary
     margin = _boundary_margin(lam)
@@ -54,10 +60,10 @@ def uncontrollable_modes(
     if lam.size == 0:
         return []
     pbh = np.concatenate(
-        [a[None] - lam[:, None, None] * np.eye(n), np.broadcast_to(b, (lam.size,) + b.shape)], axis=2
+        [(a[None] - lam[:, None, None] * np.eye(n)) / a_scale, np.broadcast_to(b, (lam.size,) + b.shape)], axis=2
     )
     smallest = np.linalg.svd(pbh, compute_uv=False)[:, -1]
-    return [complex(z) for z in lam[smallest <= rtol * scale]]
+    return [complex(z) for z in lam[smallest <= rtol]]
 
 
 def _fmt(modes: list[complex]) -> str:

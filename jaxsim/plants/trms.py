@@ -43,7 +43,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxsim.core.linearize import Equilibrium, Linearization, find_equilibrium, linearize
-from jaxsim.core.pytree import pytree_dataclass, replace, static_field
+from jaxsim.core.pytree import pytree_dataclass, replace
 from jaxsim.core.system import Plant, gaussian_sensor, Sensor
 from jaxsim.core.validation import check_finite, check_positive
 
@@ -78,7 +78,7 @@ class TRMSParams:
     T0: Any = 3.5  # s
     kc: Any = -0.2  # N·m, cross-reaction gain
     u_max: Any = 2.5  # V, input saturation |u_i| ≤ u_max (assumed; see the study's assumptions)
-    sign_smoothing: float = static_field(default=0.0)  # rad/s; 0 → exact sgn
+    sign_smoothing: Any = 0.0  # rad/s; 0 → exact sgn (a leaf: exact and smooth share compiled code)
 
 
 FEEDBACK_MANUFACTURER = TRMSParams()
@@ -86,8 +86,10 @@ SCIREP_2022 = TRMSParams(b2=0.9, Kgy=0.05, kc=2.0)
 PARAMETER_SETS = {"feedback_manufacturer": FEEDBACK_MANUFACTURER, "scirep_2022": SCIREP_2022}
 
 
-def _sgn(v: jax.Array, eps: float) -> jax.Array:
-    return jnp.sign(v) if eps == 0.0 else jnp.tanh(v / eps)
+def _sgn(v: jax.Array, eps: jax.Array) -> jax.Array:
+    """``tanh(v/ε)`` for ``ε > 0``, exact ``sgn v`` for ``ε = 0`` (NaN-free gradients either way)."""
+    smooth = eps > 0
+    return jnp.where(smooth, jnp.tanh(v / jnp.where(smooth, eps, 1.0)), jnp.sign(v))
 
 
 def main_torque(p: TRMSParams, tau1: jax.Array) -> jax.Array:
@@ -133,8 +135,7 @@ def validate_params(p: TRMSParams) -> None:
     for name in ("a1", "b1", "a2", "b2", "Mg", "B1psi", "B2psi", "B1phi", "B2phi", "Kgy", "k1", "k2",
                  "T0", "kc"):
         check_finite(name, getattr(p, name))
-    if float(p.sign_smoothing) < 0:
-        raise ValueError(f"sign_smoothing: must be ≥ 0, got {p.sign_smoothing!r}")
+    check_positive("sign_smoothing", p.sign_smoothing, allow_zero=True)
 
 
 def trms_plant(params: TRMSParams | None = None) -> Plant:
