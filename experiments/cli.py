@@ -1,4 +1,5 @@
-"""Command line: ``python -m experiments list`` and ``python -m experiments run NAME``."""
+"""Command line: ``python -m experiments list``, ``run NAME`` and ``sweep NAME`` (see
+:mod:`experiments.sweep_command`)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from experiments.config_overrides import apply_overrides
 from experiments.progress import bar
 from experiments.registry import all_studies, get_study
 from experiments.report import write_report
+from experiments.sweep_command import add_parser as add_sweep_parser, run_sweep_command
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -29,15 +31,19 @@ def _parser() -> argparse.ArgumentParser:
         "--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
         help="override a config field (repeatable), e.g. --set t_final=20",
     )
+    add_sweep_parser(sub)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
+        if args.command == "sweep":  # first: --devices must act before JAX initialises
+            return run_sweep_command(args)
         if args.command == "list":
             for name, study in all_studies().items():
-                print(f"{name:28s} {study.description}")
+                sweepable = " [sweep]" if study.per_run is not None else ""
+                print(f"{name:28s} {study.description}{sweepable}")
                 for f in dataclasses.fields(study.config_cls):
                     print(f"    {f.name} = {getattr(study.default_config(), f.name)!r}")
             return 0

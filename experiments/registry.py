@@ -8,7 +8,8 @@ import pkgutil
 import experiments
 from experiments.study import Study
 
-_INFRASTRUCTURE = {"cli", "registry", "study", "report", "progress", "config_overrides", "benchmarks"}
+_INFRASTRUCTURE = {"cli", "registry", "study", "report", "progress", "config_overrides", "benchmarks",
+                   "sweep_command"}
 
 
 def all_studies() -> dict[str, Study]:

@@ -1,6 +1,9 @@
 """What a study is: a config dataclass, ``run(config, progress) -> StudyResult``, and a report.
 
 A study module defines ``STUDY = Study(name, description, Config, run)``; the CLI discovers it.
+A study that can be swept (``python -m experiments sweep NAME``) also passes
+``per_run=lambda config: PerRun(metric, nominal, uncertain)``: one run's metrics as a pure JAX
+function of a key and a dict of named parameters (see :class:`PerRun`).
 ``StudyResult`` holds everything the report writes: flat numeric ``metrics``, ``tables`` (name →
 list of row dicts, written as CSV and into ``results.json``), ``assumptions`` (every value the paper
 did not give: name → {"value", "why"}), and matplotlib ``figures`` (name → Figure, written as PNG).
@@ -23,11 +26,28 @@ class StudyResult:
 
 
 @dataclass(frozen=True)
+class PerRun:
+    """What ``python -m experiments sweep`` needs from a study.
+
+    ``metric(key, params) -> metrics pytree``: one run, pure JAX (jit/vmap-able); ``params`` maps every
+    name of ``nominal`` (and of ``uncertain``) to a scalar; real leaves of the result get statistics,
+    boolean leaves are events (probability with a Wilson interval).  ``nominal``: every parameter a
+    ``--param`` may sweep, with its default value.  ``uncertain``: parameters drawn afresh for every
+    run (``jaxsim.montecarlo`` distributions); they override ``nominal`` and cannot be swept.
+    """
+
+    metric: Callable[[Any, dict[str, Any]], Any]
+    nominal: dict[str, float]
+    uncertain: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
 class Study:
     name: str
     description: str
     config_cls: type
     run: Callable[[Any, Callable[..., Any]], StudyResult]
+    per_run: Callable[[Any], PerRun] | None = None  # config -> PerRun, for `sweep` (optional)
 
     def default_config(self, quick: bool = False) -> Any:
         cfg = self.config_cls()

@@ -5,7 +5,9 @@ Sub-packages:
 * :mod:`jaxsim.core` — integrators, discretisation, the closed-loop rollout, signals, metrics,
   linearisation, transfer functions;
 * :mod:`jaxsim.plants` — one module per plant family of the seed papers;
-* :mod:`jaxsim.control` — controllers (PID, ...) and their design rules.
+* :mod:`jaxsim.control` — controllers (PID, ...) and their design rules;
+* :mod:`jaxsim.montecarlo` — Monte Carlo and parameter sweeps: reproducible streaming statistics,
+  sharded over devices and hosts, resumable.
 
 Importing the package enables float64 (see :mod:`jaxsim.precision`).
 """

@@ -60,6 +60,11 @@ RK4 = ExplicitRK(
 )
 
 
+def _field_and_jacobian(f: VectorField, t: jax.Array, x: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """``f(t, x)`` and ``∂f/∂x`` (forward mode: states are few)."""
+    return f(t, x), jax.jacfwd(lambda z: f(t, z))(x)
+
+
 @dataclass(frozen=True)
 class SemiImplicitEuler:
     """Linearly implicit Euler: one Newton iteration of backward Euler, Jacobian by ``jacfwd``."""
@@ -68,8 +73,7 @@ class SemiImplicitEuler:
     order: int = 1
 
     def step(self, f: VectorField, t: jax.Array, x: jax.Array, dt: jax.Array) -> jax.Array:
-        fx = f(t, x)
-        jac = jax.jacfwd(lambda z: f(t, z))(x)
+        fx, jac = _field_and_jacobian(f, t, x)
         lhs = jnp.eye(x.shape[0], dtype=x.dtype) - dt * jac
         return x + dt * jnp.linalg.solve(lhs, fx)
 
@@ -90,8 +94,7 @@ class ExponentialEuler:
     order: int = 1
 
     def step(self, f: VectorField, t: jax.Array, x: jax.Array, dt: jax.Array) -> jax.Array:
-        fx = f(t, x)
-        jac = jax.jacfwd(lambda z: f(t, z))(x)
+        fx, jac = _field_and_jacobian(f, t, x)
         return x + phi1_times(jac, fx, dt)
 
 

@@ -24,6 +24,7 @@ from typing import Any, Callable
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from jaxsim.core.pytree import pytree_dataclass, static_field
 from jaxsim.core.validation import is_concrete
@@ -79,9 +80,11 @@ class Sensor:
 
 def gaussian_sensor(std: Any = 0.0, period: float | None = None) -> Sensor:
     """Additive white Gaussian noise of standard deviation ``std`` (scalar or ``(p,)``)."""
+    if is_concrete(std):  # NumPy, not jnp: jnp ops on constants are staged inside jit
+        std_np = np.asarray(std, dtype=float)
+        if not np.all(np.isfinite(std_np) & (std_np >= 0)):
+            raise ValueError(f"std: must be finite and non-negative, got {std!r}")
     std_arr = jnp.asarray(std)
-    if is_concrete(std_arr) and bool(jnp.any(~jnp.isfinite(std_arr) | (std_arr < 0))):
-        raise ValueError(f"std: must be finite and non-negative, got {std!r}")
     return Sensor(params=std_arr, measure=_gaussian_measure, period=period, name="gaussian")
 
 

@@ -157,3 +157,14 @@ def test_fold_equals_a_reduction_of_the_stored_trajectory():
                         lambda acc, tk: acc + tk.t * jnp.abs(tk.r[0] - tk.y[0]) * timing.ts, 0.0)
     np.testing.assert_allclose(got, want, rtol=1e-13)
     np.testing.assert_array_equal(np.asarray(x_final), np.asarray(tr.x_final))
+
+
+def test_gaussian_sensor_can_be_built_inside_jit():
+    @jax.jit
+    def run(std):
+        loop = _loop(PIDParams(kp=0.4), sensor=gaussian_sensor(std))
+        return simulate(loop, jnp.zeros(2), Timing(t_final=0.1, dt=1e-2)).y_meas
+
+    const = jax.jit(lambda: gaussian_sensor(0.1).params)()
+    np.testing.assert_allclose(const, 0.1)
+    assert run(0.0).shape == (10, 1)

@@ -1,0 +1,1 @@
+"""State and fault estimation kernels (filters, observers, predictors)."""

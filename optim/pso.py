@@ -1,0 +1,242 @@
+"""Particle swarm optimisation in JAX — the gradient-free baseline (TRMS paper's tuner).
+
+Per iteration ``i`` (the order pyswarms uses, so the two compare setting for setting):
+
+1. evaluate the whole swarm in one ``vmap``ped call (non-finite losses count as ``+inf``);
+2. update personal bests, then each particle's neighbourhood best: the whole swarm
+   (``topology="global"``, gbest) or the ``neighbors`` particles on either side by index on a ring
+   (``"ring"``, lbest);
+3. ``v ← w_i v + c1 r1 (p_best − x) + c2 r2 (n_best − x)``, ``r1, r2 ~ U(0, 1)`` per particle and
+   dimension, then each component clamped to ``±velocity_clamp·(hi − lo)``;
+4. ``x ← x + v``, with out-of-box components handled by ``bounds``: ``"reflect"`` (mirrored at the
+   bound, repeatedly), ``"clip"`` (set to the nearest bound) or ``"absorb"`` (set to the bound and
+   that velocity component zeroed).
+
+Inertia: a constant, a callable ``w(i, n_iters)``, or ``(start, end)`` giving
+``w_i = end + (start − end)(n_iters − i)/n_iters`` (pyswarms' ``lin_variation``).  Initial
+positions are uniform in the box, initial velocities uniform in ``±velocity_clamp·(hi − lo)``
+(or ``±(hi − lo)`` without clamp).
+
+:func:`pso_init` / :func:`pso_step` are the pure pair; :func:`pso` drives them (a few iterations
+per jitted call) and records the best loss, simulations and wall time per iteration.
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from dataclasses import dataclass
+from typing import Any, Callable, Literal, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from optim.results import SearchHistory, SearchResult, as_box, check_int
+
+Topology = Literal["global", "ring"]
+BoundMode = Literal["reflect", "clip", "absorb"]
+
+
+@dataclass(frozen=True)
+class PSOConfig:
+    """Static settings of the swarm (see the module docstring)."""
+
+    n_particles: int = 64
+    n_iters: int = 100
+    topology: Topology = "global"
+    neighbors: int = 1
+    inertia: Any = (0.9, 0.4)
+    c1: float = 1.5
+    c2: float = 1.5
+    bounds: BoundMode = "reflect"
+    velocity_clamp: float | None = 0.5
+
+    def __post_init__(self) -> None:
+        check_int("n_particles", self.n_particles, 2)
+        check_int("n_iters", self.n_iters, 1)
+        check_int("neighbors", self.neighbors, 1)
+        if self.topology not in ("global", "ring"):
+            raise ValueError(f"topology: must be 'global' or 'ring', got {self.topology!r}")
+        if self.bounds not in ("reflect", "clip", "absorb"):
+            raise ValueError(f"bounds: must be 'reflect', 'clip' or 'absorb', got {self.bounds!r}")
+        for name in ("c1", "c2"):
+            v = getattr(self, name)
+            if not np.isfinite(v) or v < 0:
+                raise ValueError(f"{name}: must be finite and non-negative, got {v!r}")
+        if self.velocity_clamp is not None and not (np.isfinite(self.velocity_clamp) and self.velocity_clamp > 0):
+            raise ValueError("velocity_clamp: must be positive (a fraction of hi − lo) or None, "
+                             f"got {self.velocity_clamp!r}")
+        inertia = self.inertia
+        if isinstance(inertia, tuple):
+            if len(inertia) != 2 or not all(np.isfinite(v) for v in inertia):
+                raise ValueError(f"inertia: a schedule must be (start, end), got {inertia!r}")
+        elif not callable(inertia) and not np.isfinite(inertia):
+            raise ValueError(f"inertia: must be a number, (start, end) or a callable, got {inertia!r}")
+
+    def inertia_at(self, i: jax.Array) -> jax.Array:
+        """Inertia weight of iteration ``i`` (0-based)."""
+        w = self.inertia
+        if isinstance(w, tuple):
+            start, end = w
+            return end + (start - end) * (self.n_iters - i) / self.n_iters
+        if callable(w):
+            return w(i, self.n_iters)
+        return jnp.asarray(w, float) + 0.0 * i
+
+
+class SwarmState(NamedTuple):
+    """Positions, velocities ``(n, d)``, personal bests and the iteration counter."""
+
+    position: jax.Array
+    velocity: jax.Array
+    pbest_position: jax.Array
+    pbest_loss: jax.Array
+    key: jax.Array
+    iteration: jax.Array
+
+
+def _vmax(cfg: PSOConfig, lo: jax.Array, hi: jax.Array) -> jax.Array:
+    frac = 1.0 if cfg.velocity_clamp is None else cfg.velocity_clamp
+    return frac * (hi - lo)
+
+
+@functools.partial(jax.jit, static_argnames="cfg")
+def pso_init(key: jax.Array, lo: jax.Array, hi: jax.Array, cfg: PSOConfig) -> SwarmState:
+    """A swarm spread uniformly over the box ``[lo, hi]`` (``(d,)`` each)."""
+    k_pos, k_vel, k_run = jax.random.split(key, 3)
+    n, d = cfg.n_particles, lo.shape[0]
+    pos = jax.random.uniform(k_pos, (n, d), lo.dtype, lo, hi)
+    vmax = _vmax(cfg, lo, hi)
+    vel = jax.random.uniform(k_vel, (n, d), lo.dtype, -vmax, vmax)
+    return SwarmState(pos, vel, pos, jnp.full((n,), jnp.inf, lo.dtype), k_run, jnp.asarray(0, jnp.int32))
+
+
+def neighbourhood_best(pbest_position: jax.Array, pbest_loss: jax.Array, cfg: PSOConfig) -> jax.Array:
+    """Best personal-best position in each particle's neighbourhood, ``(n, d)``."""
+    n = pbest_loss.shape[0]
+    if cfg.topology == "global":
+        return jnp.broadcast_to(pbest_position[jnp.argmin(pbest_loss)], pbest_position.shape)
+    offsets = jnp.arange(-cfg.neighbors, cfg.neighbors + 1)
+    idx = (jnp.arange(n)[:, None] + offsets[None, :]) % n  # (n, 2k+1) ring neighbours, self included
+    pick = jnp.take_along_axis(idx, jnp.argmin(pbest_loss[idx], axis=1)[:, None], axis=1)[:, 0]
+    return pbest_position[pick]
+
+
+def handle_bounds(pos: jax.Array, vel: jax.Array, lo: jax.Array, hi: jax.Array, mode: BoundMode):
+    """Bring ``pos`` back into ``[lo, hi]``; returns ``(pos, vel)``."""
+    if mode == "reflect":
+        span = hi - lo
+        y = jnp.mod(pos - lo, 2 * span)
+        return lo + jnp.where(y > span, 2 * span - y, y), vel
+    clipped = jnp.clip(pos, lo, hi)
+    if mode == "clip":
+        return clipped, vel
+    return clipped, jnp.where(clipped != pos, 0.0, vel)
+
+
+def pso_step(losses_of: Callable[[jax.Array], jax.Array], state: SwarmState, lo: jax.Array,
+             hi: jax.Array, cfg: PSOConfig) -> tuple[SwarmState, jax.Array]:
+    """Evaluate the swarm (``losses_of(positions (n, d)) -> (n,)``), update bests, move.
+
+    Returns the new state and the best loss found so far.
+    """
+    losses = losses_of(state.position)
+    losses = jnp.where(jnp.isfinite(losses), losses, jnp.inf)
+    improved = losses < state.pbest_loss
+    pbest_loss = jnp.where(improved, losses, state.pbest_loss)
+    pbest_pos = jnp.where(improved[:, None], state.position, state.pbest_position)
+    nbest = neighbourhood_best(pbest_pos, pbest_loss, cfg)
+    key, k1, k2 = jax.random.split(state.key, 3)
+    shape = state.position.shape
+    r1 = jax.random.uniform(k1, shape, state.position.dtype)
+    r2 = jax.random.uniform(k2, shape, state.position.dtype)
+    w = cfg.inertia_at(state.iteration)
+    vel = (w * state.velocity + cfg.c1 * r1 * (pbest_pos - state.position)
+           + cfg.c2 * r2 * (nbest - state.position))
+    if cfg.velocity_clamp is not None:
+        vmax = _vmax(cfg, lo, hi)
+        vel = jnp.clip(vel, -vmax, vmax)
+    pos, vel = handle_bounds(state.position + vel, vel, lo, hi, cfg.bounds)
+    new = SwarmState(pos, vel, pbest_pos, pbest_loss, key, state.iteration + 1)
+    return new, jnp.min(pbest_loss)
+
+
+@functools.partial(jax.jit, static_argnames=("loss", "batched", "cfg", "chunk"))
+def _jitted_steps(state: SwarmState, lo: jax.Array, hi: jax.Array, *, loss: Callable, batched: bool,
+                  cfg: PSOConfig, chunk: int) -> tuple[SwarmState, jax.Array]:
+    """``chunk`` iterations in one call (a scan); compiled once per (loss, settings), reused."""
+    losses_of = loss if batched else jax.vmap(loss)
+    return jax.lax.scan(lambda s, _: pso_step(losses_of, s, lo, hi, cfg), state, None, length=chunk)
+
+
+def _chunk_size(n_iters: int, iters_per_call: int) -> int:
+    """Largest divisor of ``n_iters`` not above ``iters_per_call`` (so every call has one shape)."""
+    return max(c for c in range(1, min(iters_per_call, n_iters) + 1) if n_iters % c == 0)
+
+
+def pso(
+    loss: Callable[[jax.Array], jax.Array],
+    lo: Any,
+    hi: Any,
+    *,
+    n_particles: int = 64,
+    n_iters: int = 100,
+    key: jax.Array | None = None,
+    topology: Topology = "global",
+    neighbors: int = 1,
+    inertia: Any = (0.9, 0.4),
+    c1: float = 1.5,
+    c2: float = 1.5,
+    bounds: BoundMode = "reflect",
+    velocity_clamp: float | None = 0.5,
+    sims_per_eval: int = 1,
+    batched: bool = False,
+    iters_per_call: int = 10,
+) -> SearchResult:
+    """Minimise ``loss(x)`` over the box ``lo ≤ x ≤ hi`` (``(d,)`` each) with a particle swarm.
+
+    ``loss`` maps one point ``(d,)`` to a scalar and is ``vmap``ped over the swarm — one call per
+    iteration (``batched=True``: ``loss`` already maps ``(n, d)`` to ``(n,)``).  ``key`` defaults
+    to ``PRNGKey(0)``.  Simulations: ``n_particles·sims_per_eval`` per iteration.
+
+    The host syncs every ``iters_per_call`` iterations (rounded down to a divisor of ``n_iters``);
+    the wall time of the iterations inside one call is interpolated linearly (they cost the same).
+    """
+    lo, hi = as_box(lo, hi)
+    if isinstance(inertia, list):
+        inertia = tuple(inertia)
+    cfg = PSOConfig(n_particles=n_particles, n_iters=n_iters, topology=topology, neighbors=neighbors,
+                    inertia=inertia, c1=c1, c2=c2, bounds=bounds, velocity_clamp=velocity_clamp)
+    sims_per_eval = check_int("sims_per_eval", sims_per_eval)
+    if not callable(loss):
+        raise ValueError(f"loss: must be callable, got {type(loss).__name__}")
+    chunk = _chunk_size(cfg.n_iters, check_int("iters_per_call", iters_per_call))
+    static = dict(loss=loss, batched=batched, cfg=cfg, chunk=chunk)
+    t0 = time.perf_counter()
+    state = pso_init(jax.random.PRNGKey(0) if key is None else key, lo, hi, cfg)
+    _jitted_steps.lower(state, lo, hi, **static).compile()  # cached by jit for the loop below
+    compile_s = time.perf_counter() - t0
+    best, wall = np.empty(cfg.n_iters), np.empty(cfg.n_iters)
+    start, last = time.perf_counter(), 0.0
+    for i in range(0, cfg.n_iters, chunk):
+        state, best_i = _jitted_steps(state, lo, hi, **static)
+        best[i:i + chunk] = np.asarray(best_i)
+        now = time.perf_counter() - start
+        wall[i:i + chunk] = last + (now - last) * np.arange(1, chunk + 1) / chunk
+        last = now
+    i_best = int(jnp.argmin(state.pbest_loss))
+    n_sims = cfg.n_particles * cfg.n_iters * sims_per_eval
+    sims = cfg.n_particles * sims_per_eval * np.arange(1, cfg.n_iters + 1)
+    message = f"{cfg.n_iters} iterations of {cfg.n_particles} particles ({cfg.topology} topology)"
+    if not np.isfinite(best[-1]):
+        message += "; every evaluated loss was non-finite"
+    return SearchResult(
+        x=state.pbest_position[i_best],
+        loss=float(state.pbest_loss[i_best]),
+        history=SearchHistory(best, sims, wall),
+        n_sims=int(n_sims),
+        wall_s=float(wall[-1]),
+        compile_s=float(compile_s),
+        message=message,
+    )

@@ -1,0 +1,59 @@
+"""Results of the gradient-free searches (particle swarm, random, grid) and their box checks."""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import jax.numpy as jnp
+import numpy as np
+
+from optim.reparam import check_bounds
+
+
+class SearchHistory(NamedTuple):
+    """Per iteration (swarm iteration, or batch of a random/grid search), NumPy arrays ``(T,)``.
+
+    best_loss: best loss found so far; sims: cumulative simulations; wall_s: cumulative seconds.
+    """
+
+    best_loss: np.ndarray
+    sims: np.ndarray
+    wall_s: np.ndarray
+
+
+class SearchResult(NamedTuple):
+    """Outcome of a search: best point ``x`` ``(d,)``, its ``loss``, the history, simulations used,
+    seconds of searching (setup and compilation excluded, reported as ``compile_s``), a message."""
+
+    x: Any
+    loss: float
+    history: SearchHistory
+    n_sims: int
+    wall_s: float
+    compile_s: float = 0.0
+    message: str = ""
+
+
+def as_box(lo: Any, hi: Any) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """Validate search bounds and return them as float arrays of shape ``(d,)``.
+
+    Raises ``ValueError`` naming ``lo``/``hi`` for non-finite bounds, ``lo ≥ hi``, or shapes that
+    do not give a 1-D box.
+    """
+    a = np.asarray(lo, dtype=float)
+    b = np.asarray(hi, dtype=float)
+    try:
+        a, b = np.broadcast_arrays(a, b)
+    except ValueError:
+        raise ValueError(f"lo/hi: shapes {np.shape(lo)} and {np.shape(hi)} do not broadcast") from None
+    if a.ndim != 1 or a.size == 0:
+        raise ValueError(f"lo/hi: must describe a 1-D box of shape (d,), got shape {a.shape}")
+    check_bounds(a, b)
+    return jnp.asarray(a), jnp.asarray(b)
+
+
+def check_int(name: str, value: Any, minimum: int = 1) -> int:
+    """Require an integer ``≥ minimum`` (bools rejected); return it as ``int``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise ValueError(f"{name}: must be an integer ≥ {minimum}, got {value!r}")
+    return int(value)

@@ -1,0 +1,60 @@
+"""The pid_tuning_comparison study through the CLI (quick mode), checked against its own oracle."""
+
+import csv
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from tests.conftest import ROOT
+
+TUNERS = ("gradient", "gradient_lbfgs", "pso", "random", "grid", "ipopt")
+
+
+@pytest.fixture(scope="module")
+def study_output(tmp_path_factory):
+    out = tmp_path_factory.mktemp("ptc")
+    proc = subprocess.run(
+        [sys.executable, "-m", "experiments", "run", "pid_tuning_comparison", "--quick", "--out", str(out)],
+        capture_output=True, text=True, cwd=ROOT, timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    return out, json.loads((out / "results.json").read_text())
+
+
+def test_outputs_and_contracted_metric_keys(study_output):
+    out, res = study_output
+    m = res["metrics"]
+    for name in TUNERS:
+        assert f"loss_{name}" in m and f"sims_{name}" in m and f"wall_s_{name}" in m
+    assert res["config"]["quick"] is True and m["budget"] == 640
+    for key in ("loss", "controller_period", "derivative_filter", "budget"):
+        assert res["assumptions"][key]["why"]
+    assert (out / "loss_vs_budget.png").stat().st_size > 20_000
+    assert (out / "step_responses.png").exists()
+    rows = list(csv.DictReader(open(out / "comparison.csv")))
+    assert [r["tuner"] for r in rows] == list(TUNERS)
+
+
+def test_budgets_are_equal_and_ipopt_is_the_optimum(study_output):
+    _, res = study_output
+    m = res["metrics"]
+    assert m["sims_gradient"] == m["sims_pso"] == m["sims_random"] == 640
+    assert m["sims_grid"] == 8**3 and m["sims_gradient_lbfgs"] <= 640 and m["sims_ipopt"] <= 640
+    # the same loss in JAX and CasADi, to rounding
+    assert m["jax_vs_casadi_loss_rel_diff"] < 1e-12 and m["jax_vs_casadi_grad_rel_diff"] < 1e-6
+    # IPOPT's point is the minimum: nothing beats it beyond rounding, the quasi-Newton tuner meets it
+    for name in TUNERS:
+        assert m[f"loss_{name}"] >= m["loss_ipopt"] * (1 - 1e-12), name
+    assert m["loss_gradient_lbfgs"] == pytest.approx(m["loss_ipopt"], rel=1e-12)
+    assert m["loss_gradient"] == pytest.approx(m["loss_ipopt"], rel=1e-8)
+    # gradient-free baselines on the same budget stay measurably worse than the gradient tuner
+    assert m["loss_random"] > m["loss_gradient"] and m["loss_grid"] > m["loss_gradient"]
+    table = res["tables"]["comparison"]
+    opt = next(r for r in table if r["tuner"] == "ipopt")
+    assert 0 < opt["kp"] < 20 and 0 < opt["ki"] < 20 and 0 < opt["kd"] < 2
+    grad = next(r for r in table if r["tuner"] == "gradient_lbfgs")
+    gains = ("kp", "ki", "kd")
+    np.testing.assert_allclose([grad[k] for k in gains], [opt[k] for k in gains], rtol=1e-5)
