@@ -16,13 +16,18 @@ Kalman–Bucy observer — and no numbers; every number here is an assumption li
    Adam, derivatives through CARE/Kalman–Bucy/regulator equations/``expm``/rollout), our JAX PSO
    (``optim.pso``), pyswarms (GlobalBestPSO, same swarm settings, our batched loss), and random
    search (``optim.random_search``).
-4. Monte-Carlo robustness of the gradient and PSO designs: ±20 % (uniform) on I1, I2, kc, a1, a2 and
-   on the sensor-noise level, fresh noise per sample, exact (non-smoothed) friction.
+   The searches are stochastic, so they are repeated with several seeds and the median run is
+   reported (every seed is in the ``search_seeds`` table).
+4. Monte-Carlo robustness of the gradient and PSO designs with ``jaxsim.montecarlo``: ±20 %
+   (uniform) on I1, I2, kc, a1, a2 and on the sensor-noise level, fresh noise per run, exact
+   (non-smoothed) friction, both designs on the same draws.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import tempfile
 import time
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -35,19 +40,9 @@ import optax
 from experiments.study import Study, StudyResult, assumption
 from experiments.trms_problem import N_Q, N_R, PERTURBED, Scenario, TRMSTuning
 from jaxsim.core.rollout import simulate
-try:  # the tuning layer (issue 5); a private stand-in with the same API until it is merged
-    from optim import compare, plot_comparison, pso, random_search, tune
-    from optim.results import SearchHistory, SearchResult
-except ImportError:
-    from experiments._optim_adapter import (
-        SearchHistory,
-        SearchResult,
-        compare,
-        plot_comparison,
-        pso,
-        random_search,
-        tune,
-    )
+import jaxsim.montecarlo as mc
+from optim import compare, plot_comparison, pso, random_search, tune
+from optim.results import SearchHistory, SearchResult
 
 STATE_LABELS = ("ψ", "φ", "ψ̇", "φ̇", "τ1", "τ2", "M_R")
 
@@ -143,13 +138,15 @@ def run_pyswarms(batched_loss: Callable, lo: np.ndarray, hi: np.ndarray, cfg: Co
     """pyswarms' GlobalBestPSO with the same swarm settings, evaluating our jitted batched loss."""
     import logging
 
-    import pyswarms as ps
-
-    logging.getLogger("pyswarms").setLevel(logging.WARNING)
     np.random.seed(seed)  # pyswarms draws from NumPy's global generator
-    opt = ps.single.GlobalBestPSO(
-        n_particles=cfg.pso_particles, dimensions=lo.size,
-        options={"c1": 1.5, "c2": 1.5, "w": cfg.pso_inertia}, bounds=(lo, hi))
+    # pyswarms' reporters open ./report.log (at import and per optimiser): keep it out of the cwd
+    with tempfile.TemporaryDirectory() as tmp, contextlib.chdir(tmp):
+        import pyswarms as ps
+
+        logging.getLogger("pyswarms").setLevel(logging.WARNING)
+        opt = ps.single.GlobalBestPSO(
+            n_particles=cfg.pso_particles, dimensions=lo.size,
+            options={"c1": 1.5, "c2": 1.5, "w": cfg.pso_inertia}, bounds=(lo, hi))
     stamps = []
 
     def objective(x):
@@ -210,28 +207,23 @@ def _theta(result: Any) -> np.ndarray:
     return np.asarray(getattr(result, "x", None) if x is None else x, float)
 
 
-def monte_carlo(problem: TRMSTuning, thetas: dict[str, np.ndarray], cfg: Config) -> dict[str, np.ndarray]:
-    """Loss of each fixed design on the same perturbed plants (exact friction, fresh noise)."""
-    key = jax.random.PRNGKey(cfg.seed + 1)
-    k_f, k_n, k_s = jax.random.split(key, 3)
-    s = cfg.mc_spread
-    factors = jax.random.uniform(k_f, (cfg.mc_samples, len(PERTURBED)), minval=1 - s, maxval=1 + s)
-    noise = problem.scenario.noise_std * jax.random.uniform(k_n, (cfg.mc_samples,), minval=1 - s, maxval=1 + s)
-    keys = jax.random.split(k_s, cfg.mc_samples)
+def monte_carlo(problem: TRMSTuning, thetas: dict[str, np.ndarray], cfg: Config) -> mc.MonteCarloResult:
+    """Loss of each fixed design on the same perturbed plants (``jaxsim.montecarlo``): every run draws
+    factors ``1 ± spread`` (uniform) for I1, I2, kc, a1, a2 and the noise level, and its own noise
+    key; all designs see the same draw (common random numbers); friction is the exact ``sgn``."""
+    designs = {name: problem.design(jnp.asarray(theta)) for name, theta in thetas.items()}
+    penalties = {name: problem.stability_penalty(p) for name, p in designs.items()}
+    space = {name: mc.deviation(1.0, cfg.mc_spread, relative=True) for name in (*PERTURBED, "noise")}
 
-    @jax.jit
-    def losses(params, stability):
-        def one(f, sd, k):
-            terms = problem.rollout_terms(params, problem.plant_params(True, f), k, sd)
-            return problem.combine(terms, stability).total
+    def run(key, p):
+        plant = problem.plant_params(True, jnp.stack([p[name] for name in PERTURBED]))
+        noise = problem.scenario.noise_std * p["noise"]
+        return {f"loss_{name}": problem.combine(problem.rollout_terms(params, plant, key, noise),
+                                                 penalties[name]).total
+                for name, params in designs.items()}
 
-        return jax.vmap(one)(factors, noise, keys)
-
-    out = {"factors": np.asarray(factors), "noise_std": np.asarray(noise)}
-    for name, theta in thetas.items():
-        params = problem.design(jnp.asarray(theta))
-        out[name] = np.asarray(losses(params, problem.stability_penalty(params)))
-    return out
+    return mc.monte_carlo(run, space, n=cfg.mc_samples, key=cfg.seed + 1,
+                          block_size=min(cfg.mc_samples, 1000), keep_runs=cfg.mc_samples)
 
 
 def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
@@ -284,7 +276,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         })
     bar.update(1)
 
-    mc = monte_carlo(problem, {"gradient": thetas["gradient"], "pso": thetas["pso"]}, cfg)
+    mc_res = monte_carlo(problem, {"gradient": thetas["gradient"], "pso": thetas["pso"]}, cfg)
     bar.update(1)
     bar.close()
 
@@ -319,9 +311,9 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         "loss_exact_friction_gradient": next(d for d in designs if d["design"] == "gradient")["loss_exact_friction"],
         "loss_exact_friction_pso": next(d for d in designs if d["design"] == "pso")["loss_exact_friction"],
     }
-    mc_rows = []
+    mc_rows, raw = [], mc_res.raw
     for name in ("gradient", "pso"):
-        v = mc[name]
+        v = np.asarray(raw.metrics[f"loss_{name}"])
         finite = np.isfinite(v)
         metrics[f"mc_loss_p95_{name}"] = float(np.percentile(np.where(finite, v, np.inf), 95))
         metrics[f"mc_loss_median_{name}"] = float(np.median(np.where(finite, v, np.inf)))
@@ -329,8 +321,9 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         mc_rows.append({"design": name, "samples": v.size, "mean": float(np.mean(v[finite])),
                         "median": metrics[f"mc_loss_median_{name}"], "p95": metrics[f"mc_loss_p95_{name}"],
                         "max": float(np.max(v[finite])), "nonfinite": int(np.sum(~finite))})
-    mc_samples = [{**{p: mc["factors"][i, j] for j, p in enumerate(PERTURBED)}, "noise_std": mc["noise_std"][i],
-                   "loss_gradient": mc["gradient"][i], "loss_pso": mc["pso"][i]} for i in range(cfg.mc_samples)]
+    mc_samples = [{**{name: float(raw.params[name][i]) for name in (*PERTURBED, "noise")},
+                   "loss_gradient": float(raw.metrics["loss_gradient"][i]),
+                   "loss_pso": float(raw.metrics["loss_pso"][i])} for i in range(cfg.mc_samples)]
     comp_rows = [{k: v for k, v in row.items() if k != "params"} for row in comp.rows]
     if polish is not None:
         comp_rows.append({"tuner": "pso_then_gradient", "best_loss": float(polish.loss),
@@ -341,7 +334,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         "convergence": plot_comparison(comp, title="TRMS LQG tracker: best loss vs simulations / seconds"),
         "responses": _plot_responses(problem, {"bryson start": theta0, "gradient": thetas["gradient"],
                                                "pso": thetas["pso"]}),
-        "monte_carlo": _plot_mc(mc),
+        "monte_carlo": _plot_mc({n: np.asarray(mc_res.raw.metrics[f"loss_{n}"]) for n in ("gradient", "pso")}),
     }
     winner = "gradient" if metrics["loss_gradient"] <= metrics["loss_pso"] else "PSO"
     metrics["loss_pso_at_gradient_sims"] = float(np.median(
@@ -422,11 +415,11 @@ def _plot_responses(problem: TRMSTuning, thetas: dict[str, np.ndarray]):
     return fig
 
 
-def _plot_mc(mc: dict[str, np.ndarray]):
+def _plot_mc(losses: dict[str, np.ndarray]):
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6, 4))
-    data = [np.asarray(mc[n])[np.isfinite(mc[n])] for n in ("gradient", "pso")]
+    data = [losses[n][np.isfinite(losses[n])] for n in ("gradient", "pso")]
     ax.boxplot(data, whis=(5, 95))
     ax.set_xticks([1, 2], ["gradient design", "PSO design"])
     ax.set_yscale("log")
