@@ -244,13 +244,14 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         return wrapped
 
     comp = compare({name: counted(fn) for name, fn in runs.items()})
-    # the searches are stochastic: repeat them with more seeds and report the median run
+    # the searches are stochastic: repeat them with more seeds and report the median run everywhere
     runs_by_seed = {name: [(cfg.seed, comp.results[name])] for name in SEARCHES}
     for seed in extra_seeds:
         for name, fn in searches(cfg, problem, batched, seed).items():
             runs_by_seed[name].append((seed, counted(fn)()))
     res = {"gradient": comp.results["gradient"],
            **{name: _median_run(runs) for name, runs in runs_by_seed.items()}}
+    comp = compare({name: (lambda r=r: r) for name, r in res.items()})  # table and curves of these runs
     thetas = {name: _theta(r) for name, r in res.items()}
     # not part of the equal-budget race: what a few gradient steps add to the swarm's answer
     polish = None
@@ -331,7 +332,9 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
                           "wall_s": float(res["pso"].wall_s) + float(polish.wall_s), "message": polish.message})
 
     figures = {
-        "convergence": plot_comparison(comp, title="TRMS LQG tracker: best loss vs simulations / seconds"),
+        "convergence": plot_comparison(
+            comp, title=f"TRMS LQG tracker: best loss vs simulations / seconds (searches: median of "
+                        f"{cfg.search_seeds} seeds)"),
         "responses": _plot_responses(problem, {"bryson start": theta0, "gradient": thetas["gradient"],
                                                "pso": thetas["pso"]}),
         "monte_carlo": _plot_mc({n: np.asarray(mc_res.raw.metrics[f"loss_{n}"]) for n in ("gradient", "pso")}),
