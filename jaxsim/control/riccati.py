@@ -27,6 +27,9 @@ Derivatives (``custom_jvp``, so forward and reverse mode): differentiating ``F(X
 the Stein operator ``dX ↦ A_clᵀ dX A_cl − dX`` (DARE).  ``F_θ[dθ]`` is the JVP of the residual at
 fixed ``X``, and the linear solve is :mod:`jaxsim.control.lyapunov`'s, whose transpose is the
 adjoint Lyapunov/Stein equation — so a reverse-mode gradient costs one extra Lyapunov solve.
+
+The forward solves use LAPACK's Schur decomposition and eigenvalues (through
+:mod:`jaxsim.control.lyapunov` and the closed-loop stability check), which JAX provides on CPU only.
 """
 
 from __future__ import annotations
