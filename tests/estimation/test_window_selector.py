@@ -25,6 +25,7 @@ from jaxsim.control.fuzzy import evaluate
 
 DT = 3.0
 J = 10
+select = jax.jit(select_windows, static_argnames=("smooth",))  # eager dispatch of many small ops is slow
 
 
 def _plots(t=20, seed=0):
@@ -89,12 +90,12 @@ def test_max_with_previous_holds_a_one_scan_outlier_and_rounding():
     L = np.zeros((6, J - 1))
     L[3, 4:] = 3.0  # one scan where windows 6..10 look bad ⇒ raw m ≈ 5
     sel = window_selector(J, kappa=1.0)
-    s = select_windows(sel, _bank_with_residuals(L))
+    s = select(sel, _bank_with_residuals(L))
     raw = np.asarray(s.m_raw)
     assert raw[3] < 5.2 and np.all(raw[[0, 1, 2, 4, 5]] > 9.0)
     np.testing.assert_array_equal(s.m, [10, 10, 10, 10, 10, 10])  # max with the previous raw output
     L[4, 4:] = 3.0  # two bad scans in a row: the window falls on the second
-    s = select_windows(sel, _bank_with_residuals(L))
+    s = select(sel, _bank_with_residuals(L))
     np.testing.assert_array_equal(s.m, [10, 10, 10, 10, 5, 10])
     np.testing.assert_array_equal(np.argmax(s.weights, -1) + 2, s.m)
     assert np.all(np.asarray(s.weights).sum(-1) == 1.0)
@@ -105,9 +106,9 @@ def test_smooth_selector_tends_to_the_exact_one():
     z[18:] += np.cumsum(np.full((12, 2), [0.0, 25.0]), 0)  # a manoeuvre
     bank = window_bank_filter(z, J, DT)
     sel = window_selector(J)
-    exact = select_windows(sel, bank)
+    exact = select(sel, bank)
     for temp in (0.25, 0.05):
-        smooth = select_windows(sel, bank, smooth=True, temperature=temp)
+        smooth = select(sel, bank, smooth=True, temperature=temp)
         m_max = np.maximum(smooth.m_raw, np.concatenate([smooth.m_raw[:1], smooth.m_raw[:-1]]))
         assert np.all(smooth.m >= m_max - 1e-12) and np.all(smooth.m <= m_max + temp * np.log(2) + 1e-12)
         np.testing.assert_allclose(np.asarray(smooth.weights).sum(-1), 1.0, atol=1e-12)
@@ -135,8 +136,9 @@ def test_selector_gradient_matches_finite_differences():
         est = select_estimates(bank, s.weights)
         return jnp.mean(jnp.sum((predicted_plots(est)[3:] - z[3:]) ** 2, -1))
 
+    loss = jax.jit(loss)
     c0 = jnp.asarray(sel.centres)
-    g = jax.grad(loss)(c0)
+    g = jax.jit(jax.grad(loss))(c0)
     h = 1e-5
     fd = [(loss(c0.at[i].add(h)) - loss(c0.at[i].add(-h))) / (2 * h) for i in (0, 4, 8)]
     np.testing.assert_allclose(np.asarray(g)[[0, 4, 8]], fd, rtol=1e-5, atol=1e-6)
