@@ -159,8 +159,9 @@ def window_selector(max_window: int = PAPER_MAX_WINDOW, slope: Any = PAPER_SLOPE
 
 
 def selector_rules(max_window: int):
-    """The paper's rule table: ``p = J…2`` (inputs 2..p good, p+1..J bad ⇒ output ``J − p``) and
-    the all-bad rule (output ``J − 1``); term 0 = good, 1 = bad."""
+    """The paper's rule table: ``p = J…2`` (inputs 2..p good, p+1..J bad ⇒ ``m = p``, consequent
+    index ``J − p`` into :attr:`WindowSelector.outputs`) and the all-bad rule (index ``J − 1``,
+    ``m = 2``); term 0 = good, 1 = bad."""
     big_j = check_max_window(max_window)
     n = big_j - 1
     ant = [[0] * (p - 1) + [1] * (big_j - p) for p in range(big_j, 1, -1)] + [[1] * n]

@@ -22,6 +22,7 @@ from jaxsim.estimation.window_selector import (
     window_selector,
 )
 from jaxsim.control.fuzzy import evaluate
+from jaxsim.estimation.alpha_beta import window_bank
 
 DT = 3.0
 J = 10
@@ -46,6 +47,11 @@ def test_bank_is_the_least_squares_line_over_the_last_j_plots():
             np.testing.assert_allclose(bank.positions[t, j - 2], icpt, rtol=0, atol=1e-9)
             np.testing.assert_allclose(bank.velocities[t, j - 2], slope, rtol=0, atol=1e-9)
             np.testing.assert_allclose(bank.predictions[t, j - 2], icpt + slope * DT, rtol=0, atol=1e-9)
+    # on full windows it is alpha_beta.window_bank (the FIR form of the same fits)
+    for t in range(J - 1, z.shape[0]):
+        ref = np.asarray(window_bank(z[t - J + 1:t + 1], DT))  # (J − 1, 2, d)
+        np.testing.assert_allclose(bank.positions[t], ref[:, 0], atol=1e-9)
+        np.testing.assert_allclose(bank.velocities[t], ref[:, 1], atol=1e-9)
     # residual norm of window j at scan t: ‖z_t − prediction made at t − 1‖, from the third plot on
     expect = np.linalg.norm(z[2:, None, :] - np.asarray(bank.predictions)[1:-1], axis=-1)
     np.testing.assert_allclose(bank.residuals[2:], expect, atol=1e-9)
