@@ -67,3 +67,14 @@ def test_coordinated_turn_step_follows_the_vessel_arc_and_reduces_to_cv():
 def test_cv_ct_imm_checks_switch_probability():
     with pytest.raises(ValueError, match="switch_prob"):
         cv_ct_imm(3.0, 0.01, 0.05, 1e-4, np.eye(2), switch_prob=1.5)
+
+
+def test_imm_can_be_built_inside_jit_and_still_checks_concrete_transitions():
+    # the study builds the CV+CT IMM per run, with the plot covariance R traced
+    tr = jax.jit(lambda R: cv_ct_imm(3.0, 0.01, 0.05, 1e-4, R, switch_prob=0.05).transition)(jnp.eye(2))
+    np.testing.assert_allclose(tr, [[0.95, 0.05], [0.05, 0.95]])
+    from jaxsim.estimation.imm import imm, linear_member
+
+    m = linear_member(np.eye(2), np.eye(2), np.eye(2), np.eye(2))
+    with pytest.raises(ValueError, match="transition"):
+        imm([m, m], np.array([[0.9, 0.2], [0.1, 0.9]]))
