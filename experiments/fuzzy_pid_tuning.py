@@ -225,14 +225,7 @@ def run_three_section(problem: Problem, cfg: Config, progress: Callable[..., Any
     }
     bar = progress(total=len(runs), desc="fuzzy_pid_tuning (a, b, c, d)", unit="method")
 
-    def counted(fn):
-        def wrapped():
-            out = fn()
-            bar.update(1)
-            return out
-        return wrapped
-
-    comparison = compare({name: counted(fn) for name, fn in runs.items()})
+    comparison = compare(runs, on_done=lambda _: bar.update(1))
     bar.close()
     rows = []
     for name, res in comparison.results.items():

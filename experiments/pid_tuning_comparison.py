@@ -115,14 +115,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     runs = tuners(cfg, problem, budget)
     bar = progress(total=len(runs), desc="pid_tuning_comparison", unit="tuner")
 
-    def counted(fn):
-        def wrapped():
-            out = fn()
-            bar.update(1)
-            return out
-        return wrapped
-
-    comp = compare({name: counted(fn) for name, fn in runs.items()})
+    comp = compare(runs, on_done=lambda _: bar.update(1))
     bar.close()
 
     ref = comp.results["ipopt"]

@@ -57,8 +57,12 @@ def _params_of(result: Any) -> Any:
         return str(x)
 
 
-def compare(runs: dict[str, Callable[[], Any]]) -> Comparison:
-    """Run each tuner (a zero-argument callable returning a TuneResult or SearchResult)."""
+def compare(runs: dict[str, Callable[[], Any]],
+            on_done: Callable[[str], Any] | None = None) -> Comparison:
+    """Run each tuner (a zero-argument callable returning a TuneResult or SearchResult).
+
+    ``on_done(name)`` is called after each tuner finishes (e.g. a progress bar's update).
+    """
     if not runs:
         raise ValueError("runs: need at least one tuner")
     curves, results, rows = {}, {}, []
@@ -68,6 +72,8 @@ def compare(runs: dict[str, Callable[[], Any]]) -> Comparison:
         t0 = time.perf_counter()
         res = run()
         total = time.perf_counter() - t0
+        if on_done is not None:
+            on_done(name)
         h = res.history
         curves[name] = Curve(np.asarray(h.sims, float), np.asarray(h.wall_s, float),
                              np.asarray(h.best_loss, float))

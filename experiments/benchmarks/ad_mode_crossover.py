@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import math
 import statistics
 import time
@@ -39,6 +38,7 @@ from jaxsim.core.system import Controller
 from jaxsim.plants.second_order import StaticParams, static_plant
 from optim.problems import PIDTuning
 from optim.tune import FORWARD_MODE_MAX_PARAMS
+from experiments.benchmarks.timing import write_json
 
 
 def scheduled_loss(problem: PIDTuning, n_seg: int):
@@ -139,9 +139,7 @@ def main(argv=None) -> dict:
           f"optim.tune.FORWARD_MODE_MAX_PARAMS = {FORWARD_MODE_MAX_PARAMS}")
     out = {"rows": rows, "reverse_faster_from_params_median": cross_med,
            "reverse_faster_from_params_min": cross_min, "n_ticks": problem.n_ticks}
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(out, fh, indent=2)
+    write_json(args.json, out)
     return out
 
 

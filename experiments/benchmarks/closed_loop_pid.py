@@ -21,8 +21,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
-import statistics
 import time
 
 import control
@@ -36,6 +34,7 @@ from jaxsim.control.pid import PIDParams, pid, pid_transfer_function
 from jaxsim.core.rollout import ClosedLoop, Timing, fold
 from jaxsim.core.signals import Step
 from jaxsim.plants.second_order import static_plant
+from experiments.benchmarks.timing import median_time, write_json
 
 K, T1, T2, TF = 2.0, 0.1, 0.5, 0.02
 
@@ -90,14 +89,6 @@ def scipy_itae(g, t):
     return float(np.sum(t * np.abs(1.0 - sol.y[0])) * (t[1] - t[0]))
 
 
-def _median_time(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
 
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -120,12 +111,12 @@ def main(argv=None) -> dict:
     start = time.perf_counter()
     ours = np.asarray(fn(g64).block_until_ready())
     out["ours_first_call_s"] = time.perf_counter() - start
-    out["ours_s"] = _median_time(lambda: fn(g64).block_until_ready(), args.repeats)
+    out["ours_s"] = median_time(lambda: fn(g64).block_until_ready(), args.repeats)
     if args.float32:
         fn32 = ours_fn(args.t_final, args.dt, jnp.float32)
         g32 = shard_batch(gains, jnp.float32)
         fn32(g32).block_until_ready()
-        out["ours_float32_s"] = _median_time(lambda: fn32(g32).block_until_ready(), args.repeats)
+        out["ours_float32_s"] = median_time(lambda: fn32(g32).block_until_ready(), args.repeats)
 
     idx = rng.choice(args.n, size=args.subset, replace=False)
     start = time.perf_counter()
@@ -153,9 +144,7 @@ def main(argv=None) -> dict:
     print(f"  ITAE max rel. difference: ours vs control {out['itae_rel_diff_vs_control_max']:.2e}, "
           f"ours vs scipy {out['itae_rel_diff_vs_scipy_max']:.2e}, control vs scipy "
           f"{out['control_vs_scipy_rel_diff_max']:.2e}")
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(out, fh, indent=2)
+    write_json(args.json, out)
     return out
 
 

@@ -24,8 +24,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
-import json
-import statistics
 import time
 import warnings
 
@@ -35,6 +33,7 @@ import numpy as np
 
 import jaxsim  # noqa: F401  (float64)
 from jaxsim.control import fuzzy as fz
+from experiments.benchmarks.timing import median_time, write_json
 
 T = 7
 N_INPUT = 121  # input universe (the triangle corners lie on it, so scikit-fuzzy's interpolation is exact)
@@ -93,14 +92,6 @@ def simpful_system(subdivisions: int):
     return fs
 
 
-def _median_time(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
 
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -123,16 +114,16 @@ def main(argv=None) -> dict:
     start = time.perf_counter()
     ours = np.asarray(fn(xs).block_until_ready())
     out["ours_first_call_s"] = time.perf_counter() - start
-    out["ours_evals_per_s"] = args.n / _median_time(lambda: fn(xs).block_until_ready(), args.repeats)
+    out["ours_evals_per_s"] = args.n / median_time(lambda: fn(xs).block_until_ready(), args.repeats)
     whole = ours_fn()
     np.testing.assert_allclose(np.asarray(whole(xs)), ours, rtol=0, atol=1e-12)
-    out["ours_whole_batch_vmap_evals_per_s"] = args.n / _median_time(lambda: whole(xs).block_until_ready(),
+    out["ours_whole_batch_vmap_evals_per_s"] = args.n / median_time(lambda: whole(xs).block_until_ready(),
                                                                       args.repeats)
     if args.float32:
         fn32 = ours_fn(jnp.float32, batch_size=args.batch_size)
         x32 = jnp.asarray(x, jnp.float32)
         fn32(x32).block_until_ready()
-        out["ours_float32_evals_per_s"] = args.n / _median_time(lambda: fn32(x32).block_until_ready(), args.repeats)
+        out["ours_float32_evals_per_s"] = args.n / median_time(lambda: fn32(x32).block_until_ready(), args.repeats)
 
     sub = x[: args.subset]
     sim = skfuzzy_sim()
@@ -185,9 +176,7 @@ def main(argv=None) -> dict:
     print(f"  max |ours − scikit-fuzzy| = {out['max_abs_diff_vs_skfuzzy']:.1e} (array mode "
           f"{out['max_abs_diff_vs_skfuzzy_array']:.1e}); |ours − simpful| = {out['max_abs_diff_vs_simpful']:.1e} "
           "(simpful integrates on its own grid)")
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(out, fh, indent=2)
+    write_json(args.json, out)
     return out
 
 

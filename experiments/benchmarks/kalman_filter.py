@@ -34,8 +34,6 @@ from __future__ import annotations
 
 import argparse
 import functools
-import json
-import statistics
 import time
 
 import jax
@@ -47,6 +45,7 @@ from experiments.benchmarks.closed_loop_pid import shard_batch
 from jaxsim.core.pytree import replace
 from jaxsim.estimation.lgssm import LinearGaussianSSM, kalman_filter, lgssm, sample
 from jaxsim.estimation.shared_gain import covariance_sequence, mean_filter
+from experiments.benchmarks.timing import median_time, write_json
 
 N_STATES, N_MEAS = 4, 2
 
@@ -82,14 +81,6 @@ def shared_step_flops(n: int = N_STATES, p: int = N_MEAS) -> int:
     """Flops of one mean-only step: r, m + K r, whitened r and its square, F m."""
     return (2 * p * n + p) + (2 * n * p + n) + (2 * p * p + 2 * p + 2) + 2 * n * n
 
-
-def _median_time(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
 
 
 def data_chunk(index: int, chunk: int, steps: int, dtype) -> jax.Array:
@@ -136,7 +127,7 @@ def time_sweep(fn, runs, chunk, steps, dtype, repeats, scales=None) -> tuple[flo
             start = time.perf_counter()
             first_ll = np.asarray(fn(*args).block_until_ready())
             first_call = time.perf_counter() - start
-        total += _median_time(lambda: fn(*args).block_until_ready(), repeats)
+        total += median_time(lambda: fn(*args).block_until_ready(), repeats)
     return total, first_ll, first_call
 
 
@@ -215,7 +206,7 @@ def matmul_peak(dtype, size: int = 2048, repeats: int = 3) -> float:
     a = jax.random.normal(jax.random.PRNGKey(0), (size, size), dtype=dtype)
     dot = jax.jit(jnp.dot)
     dot(a, a).block_until_ready()
-    t = _median_time(lambda: dot(a, a).block_until_ready(), repeats)
+    t = median_time(lambda: dot(a, a).block_until_ready(), repeats)
     return 2 * size**3 / t / 1e9
 
 
@@ -251,7 +242,7 @@ def main(argv=None) -> dict:
 
     def peer(scenario, name, fn, n):
         lls[scenario][name] = np.asarray(fn())
-        seconds[scenario][name] = _median_time(fn, args.repeats) * runs / n
+        seconds[scenario][name] = median_time(fn, args.repeats) * runs / n
 
     # --- scenario 1: all runs share the model (the issue's benchmark) --------------------------
     ours("shared_model", "ours_vmap_f64", ours_generic(model64), jnp.float64)
@@ -301,9 +292,7 @@ def main(argv=None) -> dict:
         ratios = {k: v / base for k, v in rows.items() if not k.startswith("ours")}
         out[f"{scenario}/ratios_vs_ours_f64"] = ratios
         print("  speed-up of ours (vmap, float64): " + ", ".join(f"{v:.1f}× vs {k}" for k, v in ratios.items()))
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(out, fh, indent=2, default=float)
+    write_json(args.json, out)
     return out
 
 

@@ -18,8 +18,6 @@ Usage: ``python -m experiments.benchmarks.lqr_gradients [--n 10000] [--subset 50
 from __future__ import annotations
 
 import argparse
-import json
-import statistics
 import time
 
 import jax
@@ -30,6 +28,7 @@ import scipy.linalg as sl
 import jaxsim  # noqa: F401  (float64)
 from jaxsim.control.lqr import lqr
 from jaxsim.plants.trms import FEEDBACK_MANUFACTURER, hover_equilibrium, linearize_at
+from experiments.benchmarks.timing import median_time, write_json
 
 
 def design_model() -> tuple[np.ndarray, np.ndarray]:
@@ -65,14 +64,6 @@ def scipy_jacobian(a, b, w, rel_step=1e-4):
     return np.stack(cols, axis=-1)
 
 
-def _median_time(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
 
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -93,7 +84,7 @@ def main(argv=None) -> dict:
     start = time.perf_counter()
     jac = np.asarray(fn(wj).block_until_ready())
     out["ours_first_call_s"] = time.perf_counter() - start
-    out["ours_s"] = _median_time(lambda: fn(wj).block_until_ready(), args.repeats)
+    out["ours_s"] = median_time(lambda: fn(wj).block_until_ready(), args.repeats)
     out["ours_failed_sets"] = int(np.sum(~np.all(np.isfinite(jac), axis=(1, 2, 3))))
 
     idx = rng.choice(args.n, size=args.subset, replace=False)
@@ -111,9 +102,7 @@ def main(argv=None) -> dict:
           f"(extrapolated from {args.subset} sets, 19 CARE solves each)")
     print(f"  speed-up: {out['ratio']:.0f}x;  max relative difference of the Jacobians: "
           f"{out['max_rel_diff_vs_fd']:.1e}")
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(out, fh, indent=2)
+    write_json(args.json, out)
     return out
 
 

@@ -40,6 +40,8 @@ import time
 
 import numpy as np
 
+from experiments.benchmarks.timing import write_json
+
 DT = 1.0
 STEPS = 100
 
@@ -220,9 +222,7 @@ def main(argv=None) -> dict:
         for m in out["memory"]:
             print(f"    n = {m['n']:>12,}: peak {m['peak_rss_mb']:.0f} MB (after compile {m['rss_after_compile_mb']:.0f} MB), "
                   f"{m['wall_s']:.1f} s, {m['n'] / m['wall_s']:,.0f} runs/s")
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(out, fh, indent=2)
+    write_json(args.json, out)
     return out
 
 

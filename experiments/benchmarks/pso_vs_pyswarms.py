@@ -26,7 +26,6 @@ Usage: ``python -m experiments.benchmarks.pso_vs_pyswarms [--repeats 3] [--pytho
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import statistics
 import time
@@ -38,6 +37,7 @@ import numpy as np
 import jaxsim  # noqa: F401  (float64)
 from optim.problems import PIDTuning
 from optim.pso import pso
+from experiments.benchmarks.timing import write_json
 
 N_PARTICLES, N_ITERS = 64, 100
 OPTIONS = {"c1": 1.5, "c2": 1.5, "w": 0.9}
@@ -170,9 +170,7 @@ def main(argv=None) -> dict:
     if args.python_loop:
         print(f"  pyswarms + per-particle Python loop: {out['pyswarms_python_loop_s_extrapolated']:.1f} s "
               f"(extrapolated from 2 iterations) → ratio {out['ratio_pyswarms_python_loop_over_ours']:.0f}×")
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(out, fh, indent=2)
+    write_json(args.json, out)
     return out
 
 

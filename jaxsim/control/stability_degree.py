@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from math import comb
-from typing import Callable, Sequence
+from typing import Sequence
 
 import numpy as np
 import scipy.optimize

@@ -9,8 +9,8 @@ Model ``dx = (A x + B u) dt + G dw``, ``E[dw dwᵀ] = Q_c dt``.
 * Kalman–Bucy (continuous measurement ``dz = C x dt + dv``, ``E[dv dvᵀ] = R_c dt``):
   ``ṁ = A m + B u + K (y − C m)``, ``K = P Cᵀ R_c⁻¹``, ``Ṗ = A P + P Aᵀ + G Q_c Gᵀ − P Cᵀ R_c⁻¹ C P``
   (:func:`kalman_bucy_derivative`, :func:`kalman_bucy_step`);
-  its stationary covariance solves the filter CARE, :func:`steady_state_kalman_bucy` (matrix sign
-  function of the Hamiltonian, Newton iteration with determinant scaling).
+  its stationary covariance solves the filter CARE, :func:`steady_state_kalman_bucy` (through
+  :mod:`jaxsim.control.kalman_gain`).
 """
 
 from __future__ import annotations
@@ -20,8 +20,9 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
+from jaxsim.control.kalman_gain import kalman_bucy
 from jaxsim.core.integrators import RK4, Solver
-from jaxsim.core.validation import check_covariance, check_finite, check_square
+from jaxsim.core.validation import check_covariance, check_square
 from jaxsim.estimation.kalman import symmetrize
 from jaxsim.estimation.types import GaussianState
 
@@ -90,38 +91,20 @@ def kalman_bucy_step(
     return GaussianState(z[:n], symmetrize(z[n:].reshape(n, n)))
 
 
-def _matrix_sign(z: jax.Array, iterations: int) -> jax.Array:
-    n = z.shape[0]
-
-    def body(_, s):
-        c = jnp.abs(jnp.linalg.det(s)) ** (-1.0 / n)
-        return 0.5 * (c * s + jnp.linalg.inv(s) / c)
-
-    return jax.lax.fori_loop(0, iterations, body, z)
-
-
 def steady_state_kalman_bucy(
-    A: Any, C: Any, Qc: Any, Rc: Any, *, G: Any = None, iterations: int = 60
+    A: Any, C: Any, Qc: Any, Rc: Any, *, G: Any = None
 ) -> tuple[jax.Array, jax.Array]:
-    """Stationary ``(P, K)`` of the Kalman–Bucy filter: ``A P + P Aᵀ + G Q_c Gᵀ − P Cᵀ R_c⁻¹ C P = 0``,
-    ``K = P Cᵀ R_c⁻¹``.  Requires ``(A, C)`` detectable and ``(A, G Q_c^{1/2})`` stabilisable."""
-    A, C, Qc, Rc = (jnp.asarray(v) for v in (A, C, Qc, Rc))
+    """Stationary ``(P (n, n), K (n, p))`` of the Kalman–Bucy filter:
+    ``A P + P Aᵀ + G Q_c Gᵀ − P Cᵀ R_c⁻¹ C P = 0``, ``K = P Cᵀ R_c⁻¹``.
+
+    Solved by :func:`jaxsim.control.kalman_gain.kalman_bucy` (the toolkit's CARE solver, implicit
+    derivatives); requires ``(A, C)`` detectable and ``(A, G Q_c^{1/2})`` stabilisable.
+    """
+    A, C = jnp.asarray(A), jnp.asarray(C)
     check_square("A", A)
-    n = A.shape[0]
-    if C.ndim != 2 or C.shape[1] != n:
-        raise ValueError(f"C: expected shape (p, {n}), got {tuple(C.shape)}")
-    check_finite("A", A)
-    check_finite("C", C)
-    G = None if G is None else jnp.asarray(G)
-    gqg = _gqg(Qc, G)
+    if C.ndim != 2 or C.shape[1] != A.shape[0]:
+        raise ValueError(f"C: expected shape (p, {A.shape[0]}), got {tuple(C.shape)}")
     check_covariance("Qc", Qc)
     check_covariance("Rc", Rc, C.shape[0])
-    # Hamiltonian of the dual control CARE: X Aᵀ-form with (Aᵀ, Cᵀ).
-    s = C.T @ jnp.linalg.solve(Rc, C)
-    ham = jnp.block([[A.T, -s], [-gqg, -A]])
-    w = _matrix_sign(ham, iterations)
-    eye = jnp.eye(n, dtype=A.dtype)
-    lhs = jnp.concatenate([w[:n, n:], w[n:, n:] + eye], axis=0)
-    rhs = -jnp.concatenate([w[:n, :n] + eye, w[n:, :n]], axis=0)
-    P = symmetrize(jnp.linalg.lstsq(lhs, rhs)[0])
-    return P, jnp.linalg.solve(Rc, C @ P).T
+    gain = kalman_bucy(A, C, Qc, Rc, G)
+    return gain.p, gain.l

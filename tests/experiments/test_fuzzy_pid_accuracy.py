@@ -1,14 +1,10 @@
 """The fuzzy_pid_accuracy study through the CLI (quick mode): the paper's eight steady-state
 errors, analytic vs simulated over the (g, f, K_g, K_f) grid, figures and assumptions."""
 
-import json
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 
-from tests.conftest import ROOT
+from tests.experiments.study_cli import run_quick_study
 
 PAPER = {  # the paper's values, spec §1.4 (linear astatic f = 0.7 is f/K_mds, the paper's line is lost)
     "ess_static_f0_fuzzy": 0.5556, "ess_static_f0_linear": 0.5556,
@@ -21,12 +17,7 @@ PAPER = {  # the paper's values, spec §1.4 (linear astatic f = 0.7 is f/K_mds, 
 @pytest.fixture(scope="module")
 def results(tmp_path_factory):
     out = tmp_path_factory.mktemp("fpa")
-    proc = subprocess.run(
-        [sys.executable, "-m", "experiments", "run", "fuzzy_pid_accuracy", "--quick", "--out", str(out)],
-        capture_output=True, text=True, cwd=ROOT, timeout=900,
-    )
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return out, json.loads((out / "results.json").read_text())
+    return out, run_quick_study("fuzzy_pid_accuracy", out)
 
 
 def test_the_eight_paper_values_analytic_and_simulated(results):

@@ -1,24 +1,15 @@
 """The fuzzy_pid_tuning study through the CLI (quick mode): equal budgets, feasible tuned
 controllers that beat the paper's and the linear one on the same loss, tuned fuzzy systems."""
 
-import json
-import subprocess
-import sys
-
 import pytest
 
-from tests.conftest import ROOT
+from tests.experiments.study_cli import run_quick_study
 
 
 @pytest.fixture(scope="module")
 def results(tmp_path_factory):
     out = tmp_path_factory.mktemp("fpt")
-    proc = subprocess.run(
-        [sys.executable, "-m", "experiments", "run", "fuzzy_pid_tuning", "--quick", "--out", str(out)],
-        capture_output=True, text=True, cwd=ROOT, timeout=900,
-    )
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return out, json.loads((out / "results.json").read_text())
+    return out, run_quick_study("fuzzy_pid_tuning", out)
 
 
 @pytest.mark.slow

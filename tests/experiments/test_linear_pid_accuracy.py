@@ -8,16 +8,13 @@ import sys
 import pytest
 
 from tests.conftest import ROOT
+from tests.experiments.study_cli import run_quick_study
 
 
 @pytest.fixture(scope="module")
 def study_output(tmp_path_factory):
     out = tmp_path_factory.mktemp("lpa")
-    proc = subprocess.run(
-        [sys.executable, "-m", "experiments", "run", "linear_pid_accuracy", "--quick", "--out", str(out)],
-        capture_output=True, text=True, cwd=ROOT, timeout=600,
-    )
-    assert proc.returncode == 0, proc.stderr
+    run_quick_study("linear_pid_accuracy", out)
     return out
 
 

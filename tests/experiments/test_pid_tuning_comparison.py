@@ -1,14 +1,11 @@
 """The pid_tuning_comparison study through the CLI (quick mode), checked against its own oracle."""
 
 import csv
-import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
-from tests.conftest import ROOT
+from tests.experiments.study_cli import run_quick_study
 
 TUNERS = ("gradient", "gradient_lbfgs", "pso", "random", "grid", "ipopt")
 
@@ -16,12 +13,7 @@ TUNERS = ("gradient", "gradient_lbfgs", "pso", "random", "grid", "ipopt")
 @pytest.fixture(scope="module")
 def study_output(tmp_path_factory):
     out = tmp_path_factory.mktemp("ptc")
-    proc = subprocess.run(
-        [sys.executable, "-m", "experiments", "run", "pid_tuning_comparison", "--quick", "--out", str(out)],
-        capture_output=True, text=True, cwd=ROOT, timeout=600,
-    )
-    assert proc.returncode == 0, proc.stderr
-    return out, json.loads((out / "results.json").read_text())
+    return out, run_quick_study("pid_tuning_comparison", out)
 
 
 def test_outputs_and_contracted_metric_keys(study_output):

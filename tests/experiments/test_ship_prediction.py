@@ -1,21 +1,14 @@
 """The ship_prediction study through the CLI (quick mode)."""
 
-import json
-import subprocess
-import sys
-
 import pytest
 
-from tests.conftest import ROOT
+from tests.experiments.study_cli import run_quick_study
 
 
 @pytest.fixture(scope="module")
 def result(tmp_path_factory):
     out = tmp_path_factory.mktemp("ship")
-    proc = subprocess.run([sys.executable, "-m", "experiments", "run", "ship_prediction", "--quick", "--out", str(out)],
-                          capture_output=True, text=True, cwd=ROOT, timeout=600)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return out, json.loads((out / "results.json").read_text())
+    return out, run_quick_study("ship_prediction", out)
 
 
 def test_metrics_against_the_paper_and_exactness(result):

@@ -1,12 +1,8 @@
 """The smo_fault study through the CLI (quick mode)."""
 
-import json
-import subprocess
-import sys
-
 import pytest
 
-from tests.conftest import ROOT
+from tests.experiments.study_cli import run_quick_study
 
 pytestmark = pytest.mark.slow  # a quick study run: about a minute of CPU
 
@@ -14,10 +10,7 @@ pytestmark = pytest.mark.slow  # a quick study run: about a minute of CPU
 @pytest.fixture(scope="module")
 def result(tmp_path_factory):
     out = tmp_path_factory.mktemp("smo")
-    proc = subprocess.run([sys.executable, "-m", "experiments", "run", "smo_fault", "--quick", "--out", str(out)],
-                          capture_output=True, text=True, cwd=ROOT, timeout=900)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return out, json.loads((out / "results.json").read_text())
+    return out, run_quick_study("smo_fault", out)
 
 
 def test_contracted_keys_files_and_assumptions(result):
