@@ -9,25 +9,28 @@ import numpy as np
 import pytest
 
 import jaxsim.montecarlo as mc
-from experiments.progress import silent
 from experiments.vessel_tracking import (
     Config,
     loss_space,
     phases,
-    run,
     simulate,
 )
 from jaxsim.estimation.track_loss import miss_distances, track_lost
 from jaxsim.estimation.window_selector import fixed_window, predicted_plots, select_estimates, window_bank_filter
+from tests.experiments.study_cli import run_quick_study
 
 
 @pytest.fixture(scope="module")
-def quick():
-    return run(Config(quick=True), silent)
+def quick(tmp_path_factory):
+    out = tmp_path_factory.mktemp("vessel_tracking")
+    res = run_quick_study("vessel_tracking", out)
+    for fig in ("error_vs_time", "window_and_sigma", "track_loss_vs_gate", "tuning"):
+        assert (out / f"{fig}.png").stat().st_size > 0
+    return res
 
 
 def test_quick_study_reproduces_the_paper_within_30_percent(quick):
-    rows = quick.tables["envelope"]
+    rows = quick["tables"]["envelope"]
     ok = {(r["quantity"], r["speed_ms"]): r["within_30pct"] for r in rows}
     by = {(r["quantity"], r["speed_ms"]): r["mc_mean"] for r in rows}
     for speed in (10.0, 20.0):
@@ -39,21 +42,21 @@ def test_quick_study_reproduces_the_paper_within_30_percent(quick):
     assert by[("error on straight legs, peak (m)", 20.0)] < 1.5 * 12.0
     # the manoeuvre shrinks the window more at 20 m/s, as in the paper (5–6 vs 3–4)
     assert by[("window in the turn (median)", 20.0)] < by[("window in the turn (median)", 10.0)] - 1.5
-    m = quick.metrics
+    m = quick["metrics"]
     assert m["max_err_turn_10ms_m"] == by[("error in the turn, peak (m)", 10.0)]
 
 
 def test_quick_study_track_loss_metrics_and_intervals(quick):
-    m = quick.metrics
+    m = quick["metrics"]
     for name in ("fuzzy", "fuzzy_tuned", "imm", "window5", "window3", "window10", "kalman_cv"):
         p, lo, hi = m[f"p_loss_{name}"], m[f"p_loss_{name}_wilson_low"], m[f"p_loss_{name}_wilson_high"]
         assert 0.0 <= lo <= p <= hi <= 1.0 and hi - lo < 0.1  # 1,000 runs: half-width ≤ 3.1 %
     assert {"rmse_straight_m", "max_err_turn_10ms_m", "max_err_turn_20ms_m"} <= set(m)
     # a 10-scan window cannot follow the turn at 50 m; the IMM's turn model can
     assert m["p_loss_window10"] > 0.5 > m["p_loss_imm"] + 0.3
-    tuning = quick.tables["tuning"][0]
+    tuning = quick["tables"]["tuning"][0]
     assert tuning["surrogate_tuned"] < tuning["surrogate_initial"]
-    curve = [r for r in quick.tables["track_loss"] if r["tracker"] == "fuzzy"]
+    curve = [r for r in quick["tables"]["track_loss"] if r["tracker"] == "fuzzy"]
     p = [r["p_loss"] for r in sorted(curve, key=lambda r: r["gate_m"])]
     assert all(a >= b for a, b in zip(p, p[1:]))  # same runs at every gate: monotone in the gate
 
