@@ -22,7 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxsim.core.pytree import pytree_dataclass, static_field
-from jaxsim.core.validation import check_finite
+from jaxsim.core.validation import check_finite, is_concrete
 from jaxsim.estimation import kalman
 from jaxsim.estimation.ekf import ekf_predict, ekf_update
 from jaxsim.estimation.lgssm import prepare_measurements
@@ -117,15 +117,15 @@ class IMMResult(NamedTuple):
 def imm(members: Any, transition: Any) -> IMM:
     """Build an :class:`IMM`; checks that ``transition`` is ``(M, M)`` row-stochastic."""
     members = tuple(members)
-    pi = jnp.asarray(transition)
     k = len(members)
-    if pi.shape != (k, k):
-        raise ValueError(f"transition: expected shape ({k}, {k}) for {k} members, got {tuple(pi.shape)}")
-    check_finite("transition", pi)
-    arr = np.asarray(pi)
-    if np.any(arr < 0) or not np.allclose(arr.sum(axis=1), 1.0, atol=1e-10):
-        raise ValueError("transition: rows must be probabilities summing to 1")
-    return IMM(members, pi)
+    if np.shape(transition) != (k, k):
+        raise ValueError(f"transition: expected shape ({k}, {k}) for {k} members, got {tuple(np.shape(transition))}")
+    check_finite("transition", transition)
+    if is_concrete(transition):  # NumPy on the input: jnp values are staged inside jit
+        arr = np.asarray(transition, dtype=float)
+        if np.any(arr < 0) or not np.allclose(arr.sum(axis=1), 1.0, atol=1e-10):
+            raise ValueError("transition: rows must be probabilities summing to 1")
+    return IMM(members, jnp.asarray(transition))
 
 
 def imm_init(means: Any, covs: Any, probs: Any) -> IMMState:

@@ -64,7 +64,8 @@ def run_one(fn: Callable[[jax.Array, Any], Any], space: Any, point: dict[str, An
 
 def metric_layout(fn: Callable, space: Any, point: dict[str, Any], key: jax.Array) -> tuple[list[Leaf], Any]:
     """Leaves of ``fn``'s output (via ``eval_shape``) and its treedef; ``ValueError`` on bad leaves."""
-    out = jax.eval_shape(lambda k: run_one(fn, space, point, k, jnp.asarray(0))[1], key)
+    # the point is an argument (traced like the real runs), so value checks inside fn see tracers, not zeros
+    out = jax.eval_shape(lambda k, pt: run_one(fn, space, pt, k, jnp.asarray(0))[1], key, point)
     flat, treedef = jax.tree_util.tree_flatten_with_path(out)
     if not flat:
         raise ValueError("fn: returned no arrays; it must return a pytree of metrics")

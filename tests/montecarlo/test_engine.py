@@ -119,3 +119,14 @@ def test_bad_arguments_raise_before_running(kwargs, match):
 def test_non_numeric_metrics_are_refused():
     with pytest.raises(ValueError, match="fn: metric 'z'"):
         mc.monte_carlo(lambda k, p: {"z": jnp.complex64(1j) * p["a"]}, {"a": mc.normal()}, 10, 0)
+
+
+def test_layout_probe_traces_the_design_point_so_value_checks_in_fn_pass():
+    from jaxsim.core.validation import check_positive
+
+    def fn(key, p):  # a metric that validates its parameters, like a study's per-run function
+        check_positive("gate", p["gate"])
+        return {"x": p["gate"] * 1.0}
+
+    res = mc.sweep(fn, {"gate": 1.0}, mc.points(["gate"], [[2.0], [3.0]]), 4, 0, block_size=4)
+    np.testing.assert_allclose([r["x"].mean for r in res.points], [2.0, 3.0])
