@@ -1,0 +1,63 @@
+"""Continuous and discrete Lyapunov equations, batchable and differentiated implicitly.
+
+Conventions are SciPy's (``scipy.linalg.solve_continuous_lyapunov`` / ``solve_discrete_lyapunov``):
+
+* continuous: ``A X + X Aᵀ = Q``; a unique solution exists iff ``λᵢ(A) + λⱼ(A) ≠ 0`` for all i, j;
+* discrete (Stein): ``A X Aᵀ − X + Q = 0``; unique iff ``λᵢ(A) λⱼ(A) ≠ 1``.
+
+Forward solve: Bartels–Stewart in complex Schur coordinates (``O(n³)``, any spectrum satisfying
+the condition above; LAPACK Schur, so CPU).  Derivatives: the solution is defined through
+``lax.custom_linear_solve`` — the tangent solves the same equation with the differentiated
+right-hand side, and the cotangent solves the *adjoint* equation (``A`` replaced by ``Aᵀ``); the
+Schur iterations are never differentiated.  Works under ``jit``, ``vmap``, ``grad``, ``jacfwd``.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from jaxsim.control import _bartels_stewart as bs
+from jaxsim.core.validation import check_finite, check_square
+
+
+def _check(a: jax.Array, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+    a = jnp.asarray(a)
+    q = jnp.asarray(q)
+    check_square("a", a)
+    if q.shape != a.shape:
+        raise ValueError(f"q: expected shape {tuple(a.shape)} to match a, got {tuple(q.shape)}")
+    check_finite("a", a)
+    check_finite("q", q)
+    dtype = jnp.result_type(a, q, float)
+    return a.astype(dtype), q.astype(dtype)
+
+
+def solve_continuous_lyapunov(a: jax.Array, q: jax.Array) -> jax.Array:
+    """Solve ``A X + X Aᵀ = Q`` for ``X``.
+
+    Args:
+        a: ``(n, n)`` real matrix.
+        q: ``(n, n)`` right-hand side (symmetric ``q`` gives a symmetric ``X``).
+
+    Returns:
+        ``X`` of shape ``(n, n)``.
+    """
+    a, q = _check(a, q)
+    return jax.lax.custom_linear_solve(
+        lambda x: a @ x + x @ a.T,
+        q,
+        solve=lambda _, rhs: bs.continuous_lyapunov(a, rhs),
+        transpose_solve=lambda _, rhs: bs.continuous_lyapunov(a.T, rhs),
+    )
+
+
+def solve_discrete_lyapunov(a: jax.Array, q: jax.Array) -> jax.Array:
+    """Solve ``A X Aᵀ − X + Q = 0`` for ``X`` (shapes as in :func:`solve_continuous_lyapunov`)."""
+    a, q = _check(a, q)
+    return jax.lax.custom_linear_solve(
+        lambda x: x - a @ x @ a.T,
+        q,
+        solve=lambda _, rhs: bs.discrete_lyapunov(a, rhs),
+        transpose_solve=lambda _, rhs: bs.discrete_lyapunov(a.T, rhs),
+    )

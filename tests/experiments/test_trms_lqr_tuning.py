@@ -1,0 +1,49 @@
+"""The trms_lqr_tuning study through the CLI in quick mode, as CI runs it."""
+
+import json
+import math
+import subprocess
+import sys
+
+import pytest
+
+from tests.conftest import ROOT
+
+REQUIRED = ("loss_gradient", "loss_pso", "loss_random", "sims_gradient", "sims_pso", "wall_gradient_s",
+            "wall_pso_s", "mc_loss_p95_gradient", "mc_loss_p95_pso")
+
+
+@pytest.fixture(scope="module")
+def study_output(tmp_path_factory):
+    out = tmp_path_factory.mktemp("trms")
+    proc = subprocess.run(
+        [sys.executable, "-m", "experiments", "run", "trms_lqr_tuning", "--quick", "--out", str(out)],
+        capture_output=True, text=True, cwd=ROOT, timeout=900,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return out
+
+
+@pytest.mark.slow
+def test_metrics_assumptions_and_outputs(study_output):
+    res = json.loads((study_output / "results.json").read_text())
+    m = res["metrics"]
+    for key in REQUIRED:
+        assert isinstance(m[key], (int, float)) and math.isfinite(m[key]), key
+    cfg = res["tables"]["effective_config"][0]
+    budget = cfg["pso_particles"] * cfg["pso_iters"]
+    assert m["sims_pso"] == budget and m["sims_random"] == budget and m["sims_pyswarms"] == budget
+    assert m["sims_gradient"] == cfg["gradient_steps"]
+    # every tuner improved on Bryson's-rule start point, and the gradient tuner descended from it
+    for name in ("gradient", "pso", "pyswarms", "random"):
+        assert m[f"loss_{name}"] < m["loss_start"], name
+    designs = {row["design"]: row for row in res["tables"]["designs"]}
+    assert designs["gradient"]["loss"] == pytest.approx(m["loss_gradient"], rel=1e-9)
+    assert designs["pso"]["loss"] == pytest.approx(m["loss_pso"], rel=1e-9)
+    for name in ("gradient", "pso"):
+        assert m[f"mc_loss_p95_{name}"] >= m[f"mc_loss_median_{name}"] > 0
+    for key in ("parameter_set", "u_max", "references", "sensor_noise", "loss", "pso", "monte_carlo"):
+        assert res["assumptions"][key]["why"], key
+    for png in ("convergence", "responses", "monte_carlo"):
+        assert (study_output / f"{png}.png").stat().st_size > 10_000
+    assert (study_output / "monte_carlo_samples.csv").exists()
