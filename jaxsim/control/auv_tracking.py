@@ -3,8 +3,8 @@
 The follower tracks a moving point ``X*`` (position, velocity and acceleration ``(X, V, A)``
 given by a predictor) with a fully actuated Fossen vehicle::
 
-    E    = [X − p;  wrap(Θ* − Θ)]                       position and attitude error (eq. 18)
-    V*   = J(η)⁻¹ [V; Θ̇*]                               desired body velocities
+    E    = [X − p;  w·wrap(Θ* − Θ)]                     position and attitude error (eq. 18)
+    V*   = J(η)⁻¹ [V; w·Θ̇*]                             desired body velocities
     ν_r  = V* + Λ J(η)⁻¹ E                               reference velocity
     s    = ν_r − ν                                       sliding variable (eq. 21)
     τ_n  = M_n ν̇_r + C_n(ν) ν_r + D_n(ν) ν_r + g_n(η)    computed torque, nominal model (eq. 20)
@@ -17,7 +17,8 @@ smooth switch of :mod:`jaxsim.core.switching` (``tanh``, ``saturation``, ``ratio
 
 Attitude reference (assumed — the symbol of the paper's rule "near the target point" is lost):
 roll 0, yaw and pitch along the target point's velocity ``V`` (so the follower keeps the leader's
-tangent heading while it holds station); ``Θ̇*`` follows from ``A``.  ``ν̇_r`` is the exact time
+tangent heading while it holds station); ``Θ̇*`` follows from ``A``.  Both are weighted by
+:func:`course_gate` (1 above 0.5 m/s, 0 below 0.2 m/s): a slow target point has no course.  ``ν̇_r`` is the exact time
 derivative along the model ``Ẋ = V, V̇ = A, Ȧ = 0, η̇ = J ν`` (one ``jax.jvp``), so it needs no
 follower acceleration and no numerical differentiation (which would spike at every frame).
 
@@ -57,17 +58,31 @@ class TrackingParams:
     switch: str = static_field(default="sign")
 
 
+COURSE_SPEED_BAND = (0.2, 0.5)  # m/s: below/above it the course reference is off/on (assumed)
+
+
 def _safe_heading_pitch(v: jax.Array) -> jax.Array:
-    """``[0, θ, ψ]`` along ``v``; finite value and derivatives at ``v = 0`` (then ``[0, 0, 0]``)."""
+    """``[0, θ, ψ]`` along ``v``; ``[0, 0, 0]`` (with zero derivatives) where the horizontal speed is
+    below half the course band's lower edge, where :func:`course_gate` is 0 anyway."""
     h2 = v[0] ** 2 + v[1] ** 2
-    ok_h = h2 > 1e-18
-    vx = jnp.where(ok_h, v[0], 1.0)
-    vy = jnp.where(ok_h, v[1], 0.0)
-    vh = jnp.sqrt(jnp.where(ok_h, h2, 1.0))
-    ok_v = h2 + v[2] ** 2 > 1e-18
-    psi = jnp.where(ok_h, jnp.arctan2(vy, vx), 0.0)
-    theta = jnp.where(ok_v, jnp.arctan2(jnp.where(ok_v, -v[2], 0.0), jnp.where(ok_h, vh, 1.0)), 0.0)
+    ok = h2 > (0.5 * COURSE_SPEED_BAND[0]) ** 2
+    vx = jnp.where(ok, v[0], 1.0)
+    vy = jnp.where(ok, v[1], 0.0)
+    vh = jnp.sqrt(jnp.where(ok, h2, 1.0))
+    psi = jnp.where(ok, jnp.arctan2(vy, vx), 0.0)
+    theta = jnp.where(ok, jnp.arctan2(jnp.where(ok, -v[2], 0.0), vh), 0.0)
     return jnp.stack([jnp.zeros_like(psi), theta, psi])
+
+
+def course_gate(velocity: jax.Array) -> jax.Array:
+    """Weight in ``[0, 1]`` of the course (attitude) reference: a C¹ smoothstep of the horizontal
+    speed over :data:`COURSE_SPEED_BAND`.  The direction of a slow target point is ill-defined (its
+    rate ``|A|/|V|`` blows up), e.g. while the estimator's window fills; the follower then holds
+    its attitude and only tracks the position.  At the paper's cruise (≥ 0.83 m/s) it is exactly 1."""
+    lo, hi = COURSE_SPEED_BAND
+    vh = jnp.sqrt(velocity[0] ** 2 + velocity[1] ** 2 + 1e-30)
+    r = jnp.clip((vh - lo) / (hi - lo), 0.0, 1.0)
+    return r * r * (3.0 - 2.0 * r)
 
 
 def wrap_angle(a: jax.Array) -> jax.Array:
@@ -80,19 +95,18 @@ def attitude_reference(velocity: jax.Array, acceleration: jax.Array) -> tuple[ja
     return jax.jvp(_safe_heading_pitch, (velocity,), (acceleration,))
 
 
-def reference_velocity(lam: jax.Array, eta: jax.Array, target: jax.Array) -> jax.Array:
-    """``ν_r = J⁻¹([V; Θ̇*] + Λ E)`` for ``target = [X, V, A]`` ``(3, 3)``; ``(6,)``."""
-    x, v, a = target
-    att, att_rate = attitude_reference(v, a)
-    err = jnp.concatenate([x - eta[:3], wrap_angle(att - eta[3:6])])
-    j_inv = marine.kinematics_jacobian_inverse(eta)
-    return j_inv @ (jnp.concatenate([v, att_rate]) + lam * err)
-
-
 def tracking_errors(eta: jax.Array, target: jax.Array) -> jax.Array:
-    """``E = [X − p; wrap(Θ* − Θ)]`` ``(6,)``."""
+    """``E = [X − p; w·wrap(Θ* − Θ)]`` ``(6,)`` with ``w`` the :func:`course_gate`."""
     att, _ = attitude_reference(target[1], target[2])
-    return jnp.concatenate([target[0] - eta[:3], wrap_angle(att - eta[3:6])])
+    return jnp.concatenate([target[0] - eta[:3], course_gate(target[1]) * wrap_angle(att - eta[3:6])])
+
+
+def reference_velocity(lam: jax.Array, eta: jax.Array, target: jax.Array) -> jax.Array:
+    """``ν_r = J⁻¹([V; w·Θ̇*] + Λ E)`` for ``target = [X, V, A]`` ``(3, 3)``; ``(6,)``."""
+    _, v, a = target
+    _, att_rate = attitude_reference(v, a)
+    j_inv = marine.kinematics_jacobian_inverse(eta)
+    return j_inv @ (jnp.concatenate([v, course_gate(v) * att_rate]) + lam * tracking_errors(eta, target))
 
 
 def control_force(params: TrackingParams, x: jax.Array, target: jax.Array) -> jax.Array:

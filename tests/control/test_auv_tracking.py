@@ -81,3 +81,19 @@ def test_bad_input():
         formation.camera_sensor(camera_period=0.1005, control_period=1e-3)
     with pytest.raises(ValueError, match="pos_std"):
         formation.camera_sensor(pos_std=-0.1)
+
+
+def test_course_gate_keeps_slow_targets_finite():
+    """A (nearly) stopped target point has no course: the gate is 0 below 0.2 m/s, exactly 1 at
+    the paper's cruise speeds, and the force stays finite with a huge acceleration estimate."""
+    from jaxsim.control.auv_tracking import course_gate
+
+    assert float(course_gate(jnp.array([0.1, 0.05, 0.0]))) == 0.0
+    assert float(course_gate(jnp.array([0.83, 0.0, 0.3]))) == 1.0
+    x = auv.initial_state([0.0, 0.0, 1.0], nu=[0.5, 0, 0, 0, 0, 0.1])
+    ctrl = auv_tracking()
+    slow = jnp.array([[1.0, 0.0, 1.0], [1e-3, -2e-3, 0.0], [3.0, 5.0, 0.0]])
+    still = slow.at[2].set(0.0)
+    tau = control_force(ctrl.params, x, slow)
+    assert np.all(np.isfinite(np.asarray(tau)))
+    np.testing.assert_allclose(tau[3:], control_force(ctrl.params, x, still)[3:], atol=1e-9)
