@@ -476,7 +476,7 @@ def tuning_part(cfg: Config, progress: Callable[..., Any]) -> tuple[dict, list, 
     theta0 = paper_tuning_params(cfg)
     bar = progress(total=steps, desc="tuning", unit="step")
     res = tune(train, theta0, optimizer=optax.adam(cfg.tune_lr), steps=steps, reparam=tuning_reparam(),
-               callback=lambda *_: bar.update(1), sims_per_eval=n_train,
+               callback=lambda *_: bar.update(1) and None, sims_per_eval=n_train,
                mode="reverse")  # 14 parameters over a 23k-step scan: one backward pass is cheaper
     bar.close()
     tuned = res.params
