@@ -39,3 +39,29 @@ def test_prediction_between_frames_matters(paper_runs):
     _, runs = paper_runs
     assert runs["hold"]["ss_err_m"] > 10.0 * runs["kalman"]["ss_err_m"]
     assert runs["hold"]["ss_err_x_m"] > 0.02  # outside the paper's x band
+
+
+def test_tuning_gradient_matches_finite_differences():
+    """Reverse-mode gradient of the tuning loss (through predictor, controller and RK4 rollout)
+    against central differences, on a short horizon."""
+    import dataclasses
+
+    import jax.numpy as jnp
+
+    cfg = dataclasses.replace(af.Config(), tune_t_final=7.0, tune_loss_start=4.0)
+    sample = jax.tree_util.tree_map(lambda a: a[0], af.draw_samples(cfg, 1, 5))
+    loss_fn = af.tuning_loss_fn(cfg)
+    theta = af.paper_tuning_params(cfg)
+    loss = jax.jit(lambda th: loss_fn(th, sample))
+    grad = jax.jit(jax.grad(lambda th: loss_fn(th, sample)))(theta)
+    for name, idx, eps in (("lam", 0, 1e-5), ("k_s", 1, 1e-3), ("log10_accel_psd", None, 1e-4)):
+        def shifted(d):
+            v = theta[name]
+            v = v + d if idx is None else v.at[idx].add(d)
+            return {**theta, name: v}
+
+        fd = (loss(shifted(eps)) - loss(shifted(-eps))) / (2 * eps)
+        g = grad[name] if idx is None else grad[name][idx]
+        assert abs(float(g)) > 0
+        np.testing.assert_allclose(float(g), float(fd), rtol=1e-4, atol=1e-9 * max(1.0, abs(float(fd))))
+    assert jnp.isfinite(loss(theta))
