@@ -10,9 +10,11 @@ Modules (one idea each): :mod:`~.kalman` (predict/update, Joseph and square-root
 with one covariance recursion), :mod:`~.linalg` (unrolled small-matrix factorisations),
 :mod:`~.filtering` (the shared scan loop), :mod:`~.adapters` (closed-loop ``Estimator``);
 imported by full path: :mod:`~.reduced_order_smo` (the fault-identification observer of seed 000,
-paper 2), :mod:`~.hankel_predictor` (seed 000, paper 6) and seed 003's vessel tracker:
-:mod:`~.window_selector` (α–β window bank + Sugeno window selector), :mod:`~.motion_models`
-(CV / coordinated turn, CV+CT IMM), :mod:`~.track_loss` (gate events and their soft surrogate).
+paper 2), :mod:`~.hankel_predictor` (seed 000, paper 6), :mod:`~.leader_predictor` (seed 002:
+sliding-window LS + multi-rate Kalman prediction of a target point between camera frames) and seed
+003's vessel tracker: :mod:`~.window_selector` (α–β window bank + Sugeno window selector),
+:mod:`~.motion_models` (CV / coordinated turn, CV+CT IMM), :mod:`~.track_loss` (gate events and
+their soft surrogate).
 """
 
 from jaxsim.estimation.adapters import ekf_estimator, kalman_estimator, luenberger_estimator, ukf_estimator
