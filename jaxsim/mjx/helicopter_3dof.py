@@ -23,8 +23,9 @@ from jaxsim.plants.helicopter_3dof import HelicopterParams
 def helicopter_mjcf(params: HelicopterParams | None = None, timestep: float = 1e-3) -> str:
     """MJCF XML of the stand for the (concrete) ``params``."""
     p = HelicopterParams() if params is None else params
-    heli.validate_params(p)
-    d = {k: float(v) if jnp.ndim(v) == 0 else [float(e) for e in v] for k, v in heli.derived(p).items()}
+    with jax.ensure_compile_time_eval():  # concrete numbers even when built inside a jit
+        heli.validate_params(p)
+        d = {k: float(v) if jnp.ndim(v) == 0 else [float(e) for e in v] for k, v in heli.derived(p).items()}
     eps, lh, la = heli.EPS_INERTIA, float(p.lh), float(p.la)
     b_travel, b_elev, b_pitch = d["b"]
     body_i = d["m_h"] * lh**2

@@ -34,7 +34,7 @@ import jax.numpy as jnp
 from jaxsim.core.lagrangian import body_energy, euler_lagrange, point_force, rotation
 from jaxsim.core.pytree import pytree_dataclass
 from jaxsim.core.system import Plant
-from jaxsim.core.validation import check_positive
+from jaxsim.core.validation import check_positive, is_concrete
 
 STATE_NAMES = ("travel", "elevation", "pitch", "travel_rate", "elevation_rate", "pitch_rate",
                "thrust_front", "thrust_back")
@@ -127,8 +127,9 @@ def validate_params(p: HelicopterParams) -> None:
         check_positive(name, getattr(p, name))
     for name in ("fg", "hp", "damping"):
         check_positive(name, getattr(p, name), allow_zero=True)
-    j_arm = derived(p)["j_arm"]
-    if float(j_arm) <= 0:
+    with jax.ensure_compile_time_eval():
+        j_arm = derived(p)["j_arm"]
+    if is_concrete(j_arm) and float(j_arm) <= 0:
         raise ValueError(f"je: too small for the masses (arm inertia Je − m_h la² − m_w lw² = {float(j_arm):.3g})")
 
 

