@@ -75,7 +75,9 @@ def euler_lagrange(
     force: jax.Array,
 ) -> jax.Array:
     """``q̈`` from the energies and generalised forces (module docstring); shapes ``(n,)``."""
-    mass = jax.hessian(kinetic, argnums=1)(q, qd)
-    mixed = jax.jacfwd(lambda z: jax.grad(kinetic, argnums=1)(z, qd))(q)
-    rhs = force + jax.grad(kinetic, argnums=0)(q, qd) - jax.grad(potential)(q) - mixed @ qd
+    # forward mode throughout: n is small (a few joints) and it compiles faster than reverse mode
+    momentum = jax.jacfwd(kinetic, argnums=1)  # ∂T/∂q̇ (n,)
+    mass = jax.jacfwd(momentum, argnums=1)(q, qd)
+    mixed = jax.jacfwd(momentum, argnums=0)(q, qd)
+    rhs = force + jax.jacfwd(kinetic, argnums=0)(q, qd) - jax.jacfwd(potential)(q) - mixed @ qd
     return jnp.linalg.solve(mass, rhs)

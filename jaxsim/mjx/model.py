@@ -68,7 +68,6 @@ class Layout:
     nq: int
     nv: int
     nu: int
-    timestep: float
     joints: tuple[tuple[int, int, int], ...]
     actuators: tuple[str, ...]
     output_names: tuple[str, ...]
@@ -127,7 +126,6 @@ def layout(model: mujoco.MjModel, outputs: "tuple[str, ...] | list[str] | None" 
         nq=int(model.nq),
         nv=int(model.nv),
         nu=int(model.nu),
-        timestep=float(model.opt.timestep),
         joints=joints,
         actuators=actuator_names(model),
         output_names=outputs,

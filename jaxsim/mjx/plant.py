@@ -121,7 +121,7 @@ def step(params: MJCFParams, x: jax.Array, u: jax.Array, t: Any = 0.0) -> jax.Ar
 
 def step_field(params: MJCFParams, x: jax.Array, u: jax.Array, t: Any = 0.0) -> jax.Array:
     """``(step(x, u) − x)/h``: Euler with ``dt = h`` reproduces ``mjx.step`` exactly."""
-    return (step(params, x, u, t) - x) / params.layout.timestep
+    return (step(params, x, u, t) - x) / params.model.opt.timestep  # a leaf: models differing only in h share compiled code
 
 
 _FIELD_FUNCTIONS = {"forward": forward_field, "step": step_field}
