@@ -21,6 +21,9 @@ Assumed (no public value found; each listed in :data:`ASSUMPTIONS`): ``m_w = 1.8
 follows from ``Tg``), ``J_arm = Je − m_h la² − m_w lw²``, ``hp = 5 mm``, damping ``a = 0.2 s⁻¹`` per axis
 (``B = a·J``; the paper suggests 0.1–1 s⁻¹), ``τm = 0.05 s``.
 
+At rest the travel inertia is ``Je + Jp = 0.946 kg·m²`` (the motors sit beside the arm), MPCtools'
+``Jt = 0.91``; the model keeps the consistent rigid body rather than a separate ``Jt``.
+
 State ``x = (φ, θ, ψ, φ̇, θ̇, ψ̇, F_f, F_b)`` (8,), input ``u = (V_f, V_b)`` volts, output ``(φ, θ, ψ)`` rad.
 """
 
