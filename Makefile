@@ -16,7 +16,7 @@ $(VENV)/.core: pyproject.toml
 	touch $@
 
 $(VENV)/.test: $(VENV)/.core
-	$(PIP) install -e ".[test]"
+	$(PIP) install -e ".[test,mjx,brax]"
 	touch $@
 
 install: $(VENV)/.core

@@ -107,20 +107,38 @@ def saturate(p: TRMSParams, u: jax.Array) -> jax.Array:
     return jnp.clip(u, -p.u_max, p.u_max)
 
 
-def dynamics(p: TRMSParams, x: jax.Array, u: jax.Array, t: jax.Array) -> jax.Array:
-    """``ẋ`` for state ``x (7,)`` and commanded voltages ``u (2,)`` (saturated here)."""
-    psi, phi, dpsi, dphi, tau1, tau2, m_r = x
+def motor_derivatives(p: TRMSParams, x: jax.Array, u: jax.Array) -> jax.Array:
+    """``(τ̇1, τ̇2, Ṁ_R)`` of the motor lags and the cross-reaction filter (``u`` saturated here)."""
+    tau1, tau2, m_r = x[4], x[5], x[6]
     u1, u2 = saturate(p, u)
-    m1 = main_torque(p, tau1)
-    m2 = tail_torque(p, tau2)
-    eps = p.sign_smoothing
     dtau1 = (p.k1 * u1 - p.T10 * tau1) / p.T11
     dtau2 = (p.k2 * u2 - p.T20 * tau2) / p.T21
-    ddpsi = (m1 - p.Mg * jnp.sin(psi) - (p.B1psi * dpsi + p.B2psi * _sgn(dpsi, eps))
-             - p.Kgy * m1 * dphi * jnp.cos(psi)) / p.I1
-    ddphi = (m2 - (p.B1phi * dphi + p.B2phi * _sgn(dphi, eps)) - m_r) / p.I2
     dm_r = (p.kc * (tau1 + p.T0 * dtau1) - m_r) / p.Tp
-    return jnp.stack([dpsi, dphi, ddpsi, ddphi, dtau1, dtau2, dm_r])
+    return jnp.stack([dtau1, dtau2, dm_r])
+
+
+def applied_moments(p: TRMSParams, x: jax.Array) -> jax.Array:
+    """Moments about the (pitch, yaw) axes that are not rigid-body terms (N·m, shape ``(2,)``).
+
+    Rotor moments, the rotor's gyroscopic moment, dry friction and the cross-reaction torque:
+    everything on the right-hand sides except gravity ``Mg sin ψ`` and viscous friction ``B1·rate``.
+    An MJCF model of the stand (:mod:`jaxsim.mjx.trms`) applies exactly these as actuator torques.
+    """
+    psi, dpsi, dphi, tau1, tau2, m_r = x[0], x[2], x[3], x[4], x[5], x[6]
+    m1 = main_torque(p, tau1)
+    eps = p.sign_smoothing
+    pitch = m1 - p.B2psi * _sgn(dpsi, eps) - p.Kgy * m1 * dphi * jnp.cos(psi)
+    yaw = tail_torque(p, tau2) - p.B2phi * _sgn(dphi, eps) - m_r
+    return jnp.stack([pitch, yaw])
+
+
+def dynamics(p: TRMSParams, x: jax.Array, u: jax.Array, t: jax.Array) -> jax.Array:
+    """``ẋ`` for state ``x (7,)`` and commanded voltages ``u (2,)`` (saturated here)."""
+    psi, dpsi, dphi = x[0], x[2], x[3]
+    pitch_moment, yaw_moment = applied_moments(p, x)
+    ddpsi = (pitch_moment - p.Mg * jnp.sin(psi) - p.B1psi * dpsi) / p.I1
+    ddphi = (yaw_moment - p.B1phi * dphi) / p.I2
+    return jnp.concatenate([jnp.stack([dpsi, dphi, ddpsi, ddphi]), motor_derivatives(p, x, u)])
 
 
 def output(p: TRMSParams, x: jax.Array) -> jax.Array:
