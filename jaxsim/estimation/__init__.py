@@ -10,7 +10,8 @@ Modules (one idea each): :mod:`~.kalman` (predict/update, Joseph and square-root
 with one covariance recursion), :mod:`~.linalg` (unrolled small-matrix factorisations),
 :mod:`~.filtering` (the shared scan loop), :mod:`~.adapters` (closed-loop ``Estimator``);
 imported by full path: :mod:`~.reduced_order_smo` (the fault-identification observer of seed 000,
-paper 2) and :mod:`~.hankel_predictor` (seed 000, paper 6).
+paper 2), :mod:`~.hankel_predictor` (seed 000, paper 6) and :mod:`~.leader_predictor` (seed 002:
+sliding-window LS + multi-rate Kalman prediction of a target point between camera frames).
 """
 
 from jaxsim.estimation.adapters import ekf_estimator, kalman_estimator, luenberger_estimator, ukf_estimator

@@ -1,0 +1,142 @@
+"""Computed torque on the nominal model plus a variable-structure term (seed 002, eqs. 17–24).
+
+The follower tracks a moving point ``X*`` (position, velocity and acceleration ``(X, V, A)``
+given by a predictor) with a fully actuated Fossen vehicle::
+
+    E    = [X − p;  wrap(Θ* − Θ)]                       position and attitude error (eq. 18)
+    V*   = J(η)⁻¹ [V; Θ̇*]                               desired body velocities
+    ν_r  = V* + Λ J(η)⁻¹ E                               reference velocity
+    s    = ν_r − ν                                       sliding variable (eq. 21)
+    τ_n  = M_n ν̇_r + C_n(ν) ν_r + D_n(ν) ν_r + g_n(η)    computed torque, nominal model (eq. 20)
+    τ_s  = K_s f(s)                                      variable structure (eq. 21)
+    τ    = τ_n + τ_s                                     (eq. 19)
+
+with ``J = blockdiag(R(Θ), T(Θ))`` (position error in the absolute frame; the paper writes it in the
+follower's level frame FR, which gives the same ``J⁻¹E``).  ``f`` is the exact ``sign`` or a
+smooth switch of :mod:`jaxsim.core.switching` (``tanh``, ``saturation``, ``ratio``) with a width.
+
+Attitude reference (assumed — the symbol of the paper's rule "near the target point" is lost):
+roll 0, yaw and pitch along the target point's velocity ``V`` (so the follower keeps the leader's
+tangent heading while it holds station); ``Θ̇*`` follows from ``A``.  ``ν̇_r`` is the exact time
+derivative along the model ``Ẋ = V, V̇ = A, Ȧ = 0, η̇ = J ν`` (one ``jax.jvp``), so it needs no
+follower acceleration and no numerical differentiation (which would spike at every frame).
+
+Before ``t_start`` (the follower starts 4 s after the leader, paper line 1112) ``τ = 0``.
+
+Controller input each tick: ``[t, x_F (12), X (3), V (3), A (3)]`` as read from
+:mod:`jaxsim.estimation.leader_predictor`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+
+from jaxsim.core.pytree import pytree_dataclass, static_field
+from jaxsim.core.switching import get_switch
+from jaxsim.core.system import Controller
+from jaxsim.core.validation import check_positive, check_shape
+from jaxsim.plants import auv, marine
+
+PAPER_LAMBDA = (0.2, 0.2, 0.2, 0.2, 0.4, 0.4)  # paper line 1004
+PAPER_KS = (100.0, 100.0, 100.0, 100.0, 100.0, 100.0)  # paper line 1003
+
+
+@pytree_dataclass
+class TrackingParams:
+    """lam ``(6,)`` (1/s), k_s ``(6,)`` (N, N·m), width (units of ``s``; unused by ``sign``),
+    model: nominal :class:`~jaxsim.plants.auv.AUVParams`, t_start (s); switch name (static)."""
+
+    lam: Any
+    k_s: Any
+    width: Any
+    model: auv.AUVParams
+    t_start: Any = 4.0
+    switch: str = static_field(default="sign")
+
+
+def _safe_heading_pitch(v: jax.Array) -> jax.Array:
+    """``[0, θ, ψ]`` along ``v``; finite value and derivatives at ``v = 0`` (then ``[0, 0, 0]``)."""
+    h2 = v[0] ** 2 + v[1] ** 2
+    ok_h = h2 > 1e-18
+    vx = jnp.where(ok_h, v[0], 1.0)
+    vy = jnp.where(ok_h, v[1], 0.0)
+    vh = jnp.sqrt(jnp.where(ok_h, h2, 1.0))
+    ok_v = h2 + v[2] ** 2 > 1e-18
+    psi = jnp.where(ok_h, jnp.arctan2(vy, vx), 0.0)
+    theta = jnp.where(ok_v, jnp.arctan2(jnp.where(ok_v, -v[2], 0.0), jnp.where(ok_h, vh, 1.0)), 0.0)
+    return jnp.stack([jnp.zeros_like(psi), theta, psi])
+
+
+def wrap_angle(a: jax.Array) -> jax.Array:
+    """Angle(s) wrapped to ``[−π, π)``."""
+    return (a + jnp.pi) % (2.0 * jnp.pi) - jnp.pi
+
+
+def attitude_reference(velocity: jax.Array, acceleration: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """``Θ*`` and ``Θ̇*`` ``(3,)`` each: roll 0, pitch and yaw along ``velocity``."""
+    return jax.jvp(_safe_heading_pitch, (velocity,), (acceleration,))
+
+
+def reference_velocity(lam: jax.Array, eta: jax.Array, target: jax.Array) -> jax.Array:
+    """``ν_r = J⁻¹([V; Θ̇*] + Λ E)`` for ``target = [X, V, A]`` ``(3, 3)``; ``(6,)``."""
+    x, v, a = target
+    att, att_rate = attitude_reference(v, a)
+    err = jnp.concatenate([x - eta[:3], wrap_angle(att - eta[3:6])])
+    j_inv = marine.kinematics_jacobian_inverse(eta)
+    return j_inv @ (jnp.concatenate([v, att_rate]) + lam * err)
+
+
+def tracking_errors(eta: jax.Array, target: jax.Array) -> jax.Array:
+    """``E = [X − p; wrap(Θ* − Θ)]`` ``(6,)``."""
+    att, _ = attitude_reference(target[1], target[2])
+    return jnp.concatenate([target[0] - eta[:3], wrap_angle(att - eta[3:6])])
+
+
+def control_force(params: TrackingParams, x: jax.Array, target: jax.Array) -> jax.Array:
+    """``τ = τ_n + τ_s`` ``(6,)`` at follower state ``x (12,)`` for ``target (3, 3)``."""
+    lam = jnp.asarray(params.lam)
+    eta, nu = x[:6], x[6:]
+    eta_dot = marine.kinematics_jacobian(eta) @ nu
+    target_dot = jnp.stack([target[1], target[2], jnp.zeros(3)])
+    nu_r, nu_r_dot = jax.jvp(lambda e, tg: reference_velocity(lam, e, tg), (eta, target), (eta_dot, target_dot))
+    tau_n = auv.inverse_dynamics(params.model, x, nu_r, nu_r_dot)
+    tau_s = jnp.asarray(params.k_s) * get_switch(params.switch)(nu_r - nu, params.width)
+    return tau_n + tau_s
+
+
+def _init(params: TrackingParams, r0: Any, y0: jax.Array) -> jax.Array:
+    return jnp.zeros(())
+
+
+def _step(params: TrackingParams, state: jax.Array, r: Any, y: jax.Array, dt: Any) -> tuple[jax.Array, jax.Array]:
+    t, x, target = y[0], y[1:13], y[13:22].reshape(3, 3)
+    tau = control_force(params, x, target)
+    return state, jnp.where(t >= params.t_start - 1e-9, tau, 0.0)
+
+
+def auv_tracking(
+    model: auv.AUVParams | None = None,
+    lam: Any = PAPER_LAMBDA,
+    k_s: Any = PAPER_KS,
+    switch: str = "sign",
+    width: Any = 0.01,
+    t_start: Any = 4.0,
+) -> Controller:
+    """The controller as a :class:`~jaxsim.core.system.Controller` (paper gains by default).
+
+    ``model`` is what the controller believes (default: the nominal AUV).  ``ValueError`` for
+    non-positive gains, a wrong shape, an unknown switch or a non-positive width.
+    """
+    m = auv.nominal_params() if model is None else model
+    auv.validate(m)
+    get_switch(switch)
+    for name, value in (("lam", lam), ("k_s", k_s)):
+        check_shape(name, value, (6,))
+        check_positive(name, value)
+    check_positive("width", width)
+    params = TrackingParams(jnp.asarray(lam, dtype=float), jnp.asarray(k_s, dtype=float),
+                            jnp.asarray(width, dtype=float), m, jnp.asarray(t_start, dtype=float), switch)
+    return Controller(params, _init, _step, name=f"auv_tracking_{switch}")

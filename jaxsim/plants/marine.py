@@ -1,0 +1,196 @@
+"""Building blocks of Fossen's 6-DOF marine-vehicle model, shared by every vessel plant.
+
+Conventions (Fossen, *Handbook of Marine Craft Hydrodynamics and Motion Control*, 2011):
+
+* absolute frame NED (x north, y east, z **down**); body frame x forward, y starboard, z down;
+* generalised position ``η = [x, y, z, φ, θ, ψ]`` (m, rad), body velocity
+  ``ν = [u, v, w, p, q, r]`` (m/s, rad/s), generalised force ``τ = [X, Y, Z, K, M, N]`` (N, N·m);
+* attitude by zyx Euler angles: ``R(Θ) = R_z(ψ) R_y(θ) R_x(φ)`` maps body vectors to the absolute
+  frame, ``ṗ = R ν₁``, ``Θ̇ = T(Θ) ν₂`` (singular at ``θ = ±90°``); ``η̇ = J(η) ν``;
+* dynamics ``M ν̇ + C(ν) ν + D(ν) ν + g(η) = τ`` with ``M = M_RB + M_A`` symmetric positive
+  definite, ``C`` from ``M`` by Kirchhoff's equations (:func:`coriolis_from_mass`), ``D`` diagonal
+  linear + quadratic damping and ``g`` the restoring forces of weight and buoyancy.
+
+``C(ν)`` built from any symmetric ``M`` is skew-symmetric, so ``νᵀ C(ν) ν = 0``: the Coriolis and
+centripetal terms do no work and the kinetic energy ``½ νᵀ M ν`` changes only through ``τ``,
+damping and the restoring forces (``g`` derives from the potential :func:`potential_energy`).
+All functions are pure, take single (un-batched) arrays and compose with jit/vmap/grad.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxsim.core.validation import check_finite, is_concrete
+
+
+def skew(v: jax.Array) -> jax.Array:
+    """Cross-product matrix ``S(v)`` with ``S(v) w = v × w``; ``v`` shape ``(3,)``."""
+    x, y, z = v[0], v[1], v[2]
+    zero = jnp.zeros_like(x)
+    return jnp.stack([jnp.stack([zero, -z, y]), jnp.stack([z, zero, -x]), jnp.stack([-y, x, zero])])
+
+
+def rotation_x(phi: jax.Array) -> jax.Array:
+    """Elementary rotation about x by ``phi`` (rad), ``(3, 3)``."""
+    c, s = jnp.cos(phi), jnp.sin(phi)
+    one, zero = jnp.ones_like(c), jnp.zeros_like(c)
+    return jnp.stack([jnp.stack([one, zero, zero]), jnp.stack([zero, c, -s]), jnp.stack([zero, s, c])])
+
+
+def rotation_y(theta: jax.Array) -> jax.Array:
+    """Elementary rotation about y by ``theta`` (rad), ``(3, 3)``."""
+    c, s = jnp.cos(theta), jnp.sin(theta)
+    one, zero = jnp.ones_like(c), jnp.zeros_like(c)
+    return jnp.stack([jnp.stack([c, zero, s]), jnp.stack([zero, one, zero]), jnp.stack([-s, zero, c])])
+
+
+def rotation_z(psi: jax.Array) -> jax.Array:
+    """Elementary rotation about z by ``psi`` (rad), ``(3, 3)``."""
+    c, s = jnp.cos(psi), jnp.sin(psi)
+    one, zero = jnp.ones_like(c), jnp.zeros_like(c)
+    return jnp.stack([jnp.stack([c, -s, zero]), jnp.stack([s, c, zero]), jnp.stack([zero, zero, one])])
+
+
+def rotation_zyx(euler: jax.Array) -> jax.Array:
+    """Body-to-absolute rotation ``R_z(ψ) R_y(θ) R_x(φ)`` for ``euler = [φ, θ, ψ]`` (rad)."""
+    return rotation_z(euler[2]) @ rotation_y(euler[1]) @ rotation_x(euler[0])
+
+
+def euler_from_rotation(rot: jax.Array) -> jax.Array:
+    """``[φ, θ, ψ]`` of a zyx rotation matrix (inverse of :func:`rotation_zyx` for ``|θ| < 90°``)."""
+    phi = jnp.arctan2(rot[2, 1], rot[2, 2])
+    theta = -jnp.arcsin(jnp.clip(rot[2, 0], -1.0, 1.0))
+    psi = jnp.arctan2(rot[1, 0], rot[0, 0])
+    return jnp.stack([phi, theta, psi])
+
+
+def euler_rate_matrix(euler: jax.Array) -> jax.Array:
+    """``T(Θ)`` with ``Θ̇ = T ω`` (body angular velocity ``ω``); singular at ``θ = ±90°``."""
+    sphi, cphi = jnp.sin(euler[0]), jnp.cos(euler[0])
+    ctheta, ttheta = jnp.cos(euler[1]), jnp.tan(euler[1])
+    one, zero = jnp.ones_like(sphi), jnp.zeros_like(sphi)
+    return jnp.stack([
+        jnp.stack([one, sphi * ttheta, cphi * ttheta]),
+        jnp.stack([zero, cphi, -sphi]),
+        jnp.stack([zero, sphi / ctheta, cphi / ctheta]),
+    ])
+
+
+def euler_rate_matrix_inverse(euler: jax.Array) -> jax.Array:
+    """``T(Θ)⁻¹`` with ``ω = T⁻¹ Θ̇`` (defined everywhere)."""
+    sphi, cphi = jnp.sin(euler[0]), jnp.cos(euler[0])
+    stheta, ctheta = jnp.sin(euler[1]), jnp.cos(euler[1])
+    one, zero = jnp.ones_like(sphi), jnp.zeros_like(sphi)
+    return jnp.stack([
+        jnp.stack([one, zero, -stheta]),
+        jnp.stack([zero, cphi, ctheta * sphi]),
+        jnp.stack([zero, -sphi, ctheta * cphi]),
+    ])
+
+
+def kinematics_jacobian(eta: jax.Array) -> jax.Array:
+    """``J(η) = blockdiag(R(Θ), T(Θ))`` with ``η̇ = J ν``; ``(6, 6)``."""
+    euler = eta[3:6]
+    zero = jnp.zeros((3, 3), dtype=jnp.result_type(eta, float))
+    return jnp.block([[rotation_zyx(euler), zero], [zero, euler_rate_matrix(euler)]])
+
+
+def kinematics_jacobian_inverse(eta: jax.Array) -> jax.Array:
+    """``J(η)⁻¹ = blockdiag(Rᵀ, T⁻¹)``; ``(6, 6)``."""
+    euler = eta[3:6]
+    zero = jnp.zeros((3, 3), dtype=jnp.result_type(eta, float))
+    return jnp.block([[rotation_zyx(euler).T, zero], [zero, euler_rate_matrix_inverse(euler)]])
+
+
+def coriolis_from_mass(mass: jax.Array, nu: jax.Array) -> jax.Array:
+    """Coriolis–centripetal matrix of a body with (rigid + added) mass matrix ``M (6, 6)``.
+
+    Fossen's velocity-dependent parametrisation (his Theorem 3.2 applied to ``M``)::
+
+        C(ν) = [[ 0₃,        −S(M₁₁ν₁ + M₁₂ν₂)],
+                [−S(M₁₁ν₁ + M₁₂ν₂), −S(M₂₁ν₁ + M₂₂ν₂)]]
+
+    Linear in ``M``, so ``C(M_RB + M_A) = C_RB + C_A``; skew-symmetric for every symmetric ``M``.
+    """
+    m = 0.5 * (mass + mass.T)
+    a = m[:3, :3] @ nu[:3] + m[:3, 3:] @ nu[3:]
+    b = m[3:, :3] @ nu[:3] + m[3:, 3:] @ nu[3:]
+    sa, sb = skew(a), skew(b)
+    return jnp.block([[jnp.zeros((3, 3), dtype=sa.dtype), -sa], [-sa, -sb]])
+
+
+def damping_matrix(d_linear: jax.Array, d_quadratic: jax.Array, nu: jax.Array) -> jax.Array:
+    """Diagonal ``D(ν) = diag(d₁ + d₂ |ν|)`` (the paper's ``D_ii = d1_i + d2_i |υ_i|``)."""
+    return jnp.diag(d_linear + d_quadratic * jnp.abs(nu))
+
+
+def restoring_forces(
+    euler: jax.Array, weight: Any, buoyancy: Any, r_g: jax.Array, r_b: jax.Array
+) -> jax.Array:
+    """Restoring forces ``g(η)`` (Fossen eq. 4.6) of weight ``W`` at ``r_g`` and buoyancy ``B`` at
+    ``r_b`` (body frame, m, relative to the body origin); ``(6,)`` in N and N·m."""
+    rot = rotation_zyx(euler)
+    down = jnp.asarray([0.0, 0.0, 1.0], dtype=rot.dtype)
+    f_g = rot.T @ (weight * down)  # weight in body axes
+    f_b = rot.T @ (-buoyancy * down)  # buoyancy in body axes
+    force = f_g + f_b
+    moment = jnp.cross(r_g, f_g) + jnp.cross(r_b, f_b)
+    return -jnp.concatenate([force, moment])
+
+
+def potential_energy(eta: jax.Array, weight: Any, buoyancy: Any, r_g: jax.Array, r_b: jax.Array) -> jax.Array:
+    """Gravitational + buoyancy potential (J) whose generalised force is :func:`restoring_forces`.
+
+    NED: the height of a point is ``−z``; ``V = −W·z_G + B·z_B`` with ``z_G``, ``z_B`` the depths of
+    the centres of gravity and buoyancy.
+    """
+    rot = rotation_zyx(eta[3:6])
+    z_g = eta[2] + (rot @ r_g)[2]
+    z_b = eta[2] + (rot @ r_b)[2]
+    return -weight * z_g + buoyancy * z_b
+
+
+def kinetic_energy(mass: jax.Array, nu: jax.Array) -> jax.Array:
+    """``½ νᵀ M ν`` (J)."""
+    return 0.5 * nu @ mass @ nu
+
+
+def check_mass_matrix(name: str, mass: Any, *, rtol: float = 1e-10) -> None:
+    """Require a symmetric positive-definite ``(6, 6)`` mass matrix; ``ValueError`` naming ``name``.
+
+    Only the shape is checked on tracers (values are unknown under jit/vmap).
+    """
+    if tuple(np.shape(mass)) != (6, 6):
+        raise ValueError(f"{name}: expected a (6, 6) mass matrix, got shape {tuple(np.shape(mass))}")
+    check_finite(name, mass)
+    if not is_concrete(mass):
+        return
+    m = np.asarray(mass, dtype=float)
+    scale = max(float(np.max(np.abs(m))), np.finfo(float).tiny)
+    if float(np.max(np.abs(m - m.T))) > rtol * scale:
+        raise ValueError(f"{name}: mass matrix must be symmetric (max |M − Mᵀ| = {np.max(np.abs(m - m.T)):.3g})")
+    eig = np.linalg.eigvalsh(m)
+    if float(eig[0]) <= rtol * float(eig[-1]) or float(eig[0]) <= 0.0:
+        raise ValueError(f"{name}: mass matrix must be positive definite (smallest eigenvalue {eig[0]:.6g})")
+
+
+def unbalanced_forces(
+    mass: jax.Array, nu: jax.Array, tau: jax.Array, d_linear: jax.Array, d_quadratic: jax.Array, g: jax.Array
+) -> jax.Array:
+    """``τ − C(ν)ν − D(ν)ν − g`` ``(6,)``: what accelerates the body, ``M ν̇ = unbalanced_forces``."""
+    return tau - coriolis_from_mass(mass, nu) @ nu - damping_matrix(d_linear, d_quadratic, nu) @ nu - g
+
+
+def inverse_dynamics(
+    mass: jax.Array, d_linear: jax.Array, d_quadratic: jax.Array, g: jax.Array,
+    nu: jax.Array, nu_r: jax.Array, nu_r_dot: jax.Array,
+) -> jax.Array:
+    """Computed-torque force ``M ν̇_r + C(ν) ν_r + D(ν) ν_r + g`` (Slotine–Li form); ``(6,)``."""
+    return (mass @ nu_r_dot + coriolis_from_mass(mass, nu) @ nu_r
+            + damping_matrix(d_linear, d_quadratic, nu) @ nu_r + g)
+
