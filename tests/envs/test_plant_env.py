@@ -11,7 +11,7 @@ pytest.importorskip("brax")
 import brax.envs  # noqa: E402
 from brax.envs.wrappers.training import VmapWrapper, wrap  # noqa: E402
 
-import jaxsim.envs  # noqa: E402,F401  (registers the envs)
+import jaxsim.envs  # noqa: E402  (registers the envs)
 from experiments.trms_problem import Scenario, TRMSTuning  # noqa: E402
 from jaxsim.control.open_loop import open_loop  # noqa: E402
 from jaxsim.core.metrics import itae  # noqa: E402
@@ -169,3 +169,29 @@ def test_action_mapping_and_bad_input():
         Task(**{**base, "dt": 0.0}, u_low=-1.0, u_high=1.0)
     with pytest.raises(ValueError, match="u_seq"):
         open_loop(jnp.zeros(3))
+
+
+def test_auv_env_equals_simulate_and_rest_is_equilibrium():
+    """AUV env: same inputs → same states as simulate (control period 0.05 s, 5 RK4 substeps);
+    rewards = −(‖η* − η‖² + 1e-3 ‖τ/100‖²)·dt from the trajectory; at rest with zero thrust the
+    neutrally buoyant AUV stays put and each reward is −‖η*‖²·dt exactly."""
+    env = brax.envs.get_environment("jaxsim_auv")
+    assert env.action_size == 6 and env.observation_size == 24
+    n = 10
+    actions = random_actions(jax.random.PRNGKey(5), n, 6)
+    (_, (xs, rewards, _)) = env_rollout(env, actions)
+    u = jax.vmap(env.input)(actions)
+    loop = ClosedLoop(env.task.plant, open_loop(u))
+    tr = jax.jit(lambda lp: simulate(lp, jnp.zeros(12), Timing(n * 0.05, 0.01, controller_period=0.05)))(loop)
+    np.testing.assert_allclose(np.asarray(xs), np.asarray(tr.x), rtol=0, atol=1e-13)
+    target = np.array(jaxsim.envs.auv.DEFAULT_TARGET)
+    expected = (np.sum((target - np.asarray(tr.x)[:, :6]) ** 2, axis=1)
+                + 1e-3 * np.sum((np.asarray(u) / 100.0) ** 2, axis=1)) * 0.05
+    np.testing.assert_allclose(np.asarray(rewards), -expected, rtol=1e-12)
+    assert float(jnp.max(jnp.abs(xs[-1]))) > 1e-3  # the random thrust moved it
+
+    (last, (xs0, rewards0, _)) = env_rollout(env, jnp.zeros((n, 6)))
+    assert float(jnp.max(jnp.abs(last.pipeline_state.x))) < 1e-12
+    np.testing.assert_allclose(np.asarray(rewards0), -np.sum(target**2) * 0.05, rtol=1e-12)
+    with pytest.raises(ValueError, match="target"):
+        jaxsim.envs.auv_env(target=(1.0, 2.0))
