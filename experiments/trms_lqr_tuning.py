@@ -21,6 +21,9 @@ Kalman–Bucy observer — and no numbers; every number here is an assumption li
 4. Monte-Carlo robustness of the gradient and PSO designs with ``jaxsim.montecarlo``: ±20 %
    (uniform) on I1, I2, kc, a1, a2 and on the sensor-noise level, fresh noise per run, exact
    (non-smoothed) friction, both designs on the same draws.
+5. Reinforcement-learning baseline (brax extra): brax PPO trained on the same task as a brax env
+   (:func:`jaxsim.envs.trms_env`, reward = −per-step loss), its deterministic policy scored with the
+   same loss (:mod:`experiments.trms_ppo`); budget stated in env steps and wall time.
 """
 
 from __future__ import annotations
@@ -287,7 +290,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     bar.update(1)
 
     # reinforcement-learning baseline (not part of the equal-budget race: its budget is env steps)
-    rl = run_ppo(problem, cfg) if cfg.ppo_timesteps > 0 else None
+    rl = run_ppo(problem, cfg) if cfg.ppo_timesteps > 0 and _has_brax() else None
     if rl is not None:
         designs.append({"design": "brax_ppo", "loss": rl.loss.total, "itae": rl.loss.itae,
                         "energy": rl.loss.energy, "saturation": rl.loss.saturation, "stability_penalty": 0.0,
@@ -385,7 +388,9 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         f"{cfg.sign_smoothing} rad/s); 'loss_exact_friction' re-evaluates the designs with sgn",
         f"simulation: RK4 at {cfg.ts} s, horizon {cfg.t_final} s, noise key 0 for every tuner (common random numbers)",
     ]
-    if rl is not None:
+    if rl is None:
+        notes.append("brax PPO baseline skipped (ppo_timesteps = 0 or brax not installed: pip install -e '.[brax]')")
+    else:
         notes.append(
             f"brax PPO baseline: {rl.env_steps} env steps (= {rl.env_steps / n_ticks:.0f} episodes of {cfg.t_final} s), "
             f"{rl.wall_s:.0f} s wall including compilation; deterministic policy scored with the same loss: "
@@ -396,6 +401,12 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
                                "monte_carlo_samples": mc_samples, "search_seeds": seed_rows,
                                "effective_config": [dataclasses.asdict(cfg)]},
                        assumptions=ASSUMPTIONS, figures=figures, notes=notes)
+
+
+def _has_brax() -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec("brax") is not None
 
 
 def run_ppo(problem: TRMSTuning, cfg: Config) -> Any:

@@ -22,7 +22,6 @@ import numpy as np
 from experiments.trms_problem import Breakdown, TRMSTuning
 from jaxsim.control.open_loop import open_loop
 from jaxsim.core.rollout import ClosedLoop
-from jaxsim.envs import trms_env
 
 
 @dataclass(frozen=True)
@@ -87,6 +86,8 @@ def policy_rollout(env: Any, policy: Any, n_ticks: int, repeat: int) -> PolicyRo
 def train_and_evaluate(problem: TRMSTuning, settings: PPOSettings) -> PPOResult:
     """Train brax PPO on the study's task and score its deterministic policy with the study's loss."""
     from brax.training.agents.ppo import train as ppo
+
+    from jaxsim.envs import trms_env
 
     n_ticks = int(round(problem.scenario.t_final / problem.scenario.ts))
     spread = jnp.zeros(7).at[:2].set(settings.angle_spread)
