@@ -349,6 +349,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     if rl is not None:
         n_ticks = int(round(cfg.t_final / cfg.ts))
         metrics.update({"loss_rl_ppo": rl.loss.total, "loss_exact_friction_rl_ppo": rl.loss_exact_friction,
+                        "return_rl_ppo": -rl.rollout_loss,  # Σ env rewards: must equal −loss_rl_ppo
                         "env_steps_rl_ppo": rl.env_steps, "sims_rl_ppo": rl.env_steps / n_ticks,
                         "wall_rl_ppo_s": rl.wall_s})
         comp_rows.append({"tuner": "brax_ppo", "best_loss": rl.loss.total, "sims": rl.env_steps / n_ticks,

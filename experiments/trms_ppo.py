@@ -58,7 +58,7 @@ class PPOResult(NamedTuple):
     env_steps: int  # controller ticks simulated in training
     wall_s: float  # ppo.train wall time, compilation included
     rollout: PolicyRollout  # exact-friction rollout (for the response plot)
-    policy_return: float  # −Σ rewards of the policy rollout on the surrogate plant (== loss.total)
+    rollout_loss: float  # −Σ env rewards of the policy rollout on the surrogate plant (== loss.total)
 
 
 def policy_rollout(env: Any, policy: Any, n_ticks: int, repeat: int) -> PolicyRollout:
@@ -114,4 +114,4 @@ def train_and_evaluate(problem: TRMSTuning, settings: PPOSettings) -> PPOResult:
     loss = problem.combine(terms, jnp.zeros(()))
     return PPOResult(loss=Breakdown(*(float(v) for v in loss)), loss_exact_friction=-float(np.sum(exact.reward)),
                      env_steps=env_steps, wall_s=wall, rollout=exact,
-                     policy_return=-float(np.sum(smooth.reward)))
+                     rollout_loss=-float(np.sum(smooth.reward)))

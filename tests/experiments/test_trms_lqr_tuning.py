@@ -61,6 +61,8 @@ def test_ppo_baseline_row(study_output):
     assert m["wall_rl_ppo_s"] > 0
     for key in ("loss_rl_ppo", "loss_exact_friction_rl_ppo"):
         assert math.isfinite(m[key]) and m[key] > 0, key
+    # the env's rewards along the policy rollout sum to minus the study's loss of the replayed inputs
+    assert m["return_rl_ppo"] == pytest.approx(-m["loss_rl_ppo"], rel=1e-9)
     row = next(r for r in res["tables"]["tuners"] if r["tuner"] == "brax_ppo")
     assert row["best_loss"] == m["loss_rl_ppo"] and row["sims"] == m["sims_rl_ppo"]
     design = next(r for r in res["tables"]["designs"] if r["design"] == "brax_ppo")
