@@ -21,6 +21,9 @@ Kalman–Bucy observer — and no numbers; every number here is an assumption li
 4. Monte-Carlo robustness of the gradient and PSO designs with ``jaxsim.montecarlo``: ±20 %
    (uniform) on I1, I2, kc, a1, a2 and on the sensor-noise level, fresh noise per run, exact
    (non-smoothed) friction, both designs on the same draws.
+5. Reinforcement-learning baseline (brax extra): brax PPO trained on the same task as a brax env
+   (:func:`jaxsim.envs.trms_env`, reward = −per-step loss), its deterministic policy scored with the
+   same loss (:mod:`experiments.trms_ppo`); budget stated in env steps and wall time.
 """
 
 from __future__ import annotations
@@ -74,11 +77,15 @@ class Config:
     search_seeds: int = 5  # PSO, pyswarms and random search are repeated with this many seeds (quick: 1)
     mc_samples: int = 256  # quick: 16
     mc_spread: float = 0.2
+    ppo_timesteps: int = 2_000_000  # brax PPO budget in controller ticks (quick: 200 000); 0 skips PPO
+    ppo_action_repeat: int = 5  # the policy acts every 5 ticks (20 Hz)
+    ppo_num_envs: int = 64
+    ppo_learning_rate: float = 1e-3
     seed: int = 0
 
 
 QUICK = dict(t_final=30.0, gradient_steps=25, polish_steps=0, pso_particles=10, pso_iters=6, search_seeds=1,
-             mc_samples=16)
+             mc_samples=16, ppo_timesteps=200_000)
 
 ASSUMPTIONS = {
     "parameter_set": assumption(
@@ -119,6 +126,11 @@ ASSUMPTIONS = {
                       "spec §B1.2 suggests 30 particles × 50–100 iterations, w = 0.7, c1 = c2 = 1.5"),
     "gradient": assumption("Adam, learning rate 0.1, 150 steps, from the Bryson point",
                            "one loss + forward-mode gradient per step; counted as one simulation"),
+    "ppo": assumption(
+        "brax PPO, 2e6 ticks (quick 2e5), 64 envs, unroll 20, batch 64 × 8 minibatches, 4 updates, lr 1e-3, "
+        "γ = 0.98, action repeat 5, initial angles ± 0.05 rad, observation = state − trim and r − y",
+        "an untuned reinforcement-learning baseline on the same task and per-step loss (reward = −loss); "
+        "the policy sees the true state (no noise, no observer) and has no stability constraint"),
     "monte_carlo": assumption(
         "256 samples, uniform ±20 % on I1, I2, kc, a1, a2 and the noise std, fresh noise keys, exact sgn",
         "the issue's ±20 % on I1, I2, kc, a1, a2 and sensor noise"),
@@ -233,7 +245,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     batched = jax.jit(jax.vmap(problem.loss))
     runs = tuners(cfg, problem, batched)
     extra_seeds = [cfg.seed + k for k in range(1, cfg.search_seeds)]
-    bar = progress(total=len(runs) + 3 * len(extra_seeds) + 2, desc="trms_lqr_tuning", unit="run")
+    bar = progress(total=len(runs) + 3 * len(extra_seeds) + 3, desc="trms_lqr_tuning", unit="run")
 
     def counted(fn):
         def wrapped():
@@ -275,6 +287,14 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
             **{f"R_u{i + 1}": e[N_Q + i] for i in range(N_R)},
             **{f"W_{lbl}": e[N_Q + N_R + i] for i, lbl in enumerate(STATE_LABELS)},
         })
+    bar.update(1)
+
+    # reinforcement-learning baseline (not part of the equal-budget race: its budget is env steps)
+    rl = run_ppo(problem, cfg) if cfg.ppo_timesteps > 0 and _has_brax() else None
+    if rl is not None:
+        designs.append({"design": "brax_ppo", "loss": rl.loss.total, "itae": rl.loss.itae,
+                        "energy": rl.loss.energy, "saturation": rl.loss.saturation, "stability_penalty": 0.0,
+                        "loss_exact_friction": rl.loss_exact_friction})
     bar.update(1)
 
     mc_res = monte_carlo(problem, {"gradient": thetas["gradient"], "pso": thetas["pso"]}, cfg)
@@ -326,6 +346,16 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
                    "loss_gradient": float(raw.metrics["loss_gradient"][i]),
                    "loss_pso": float(raw.metrics["loss_pso"][i])} for i in range(cfg.mc_samples)]
     comp_rows = [{k: v for k, v in row.items() if k != "params"} for row in comp.rows]
+    if rl is not None:
+        n_ticks = int(round(cfg.t_final / cfg.ts))
+        metrics.update({"loss_rl_ppo": rl.loss.total, "loss_exact_friction_rl_ppo": rl.loss_exact_friction,
+                        "return_rl_ppo": -rl.rollout_loss,  # Σ env rewards: must equal −loss_rl_ppo
+                        "env_steps_rl_ppo": rl.env_steps, "sims_rl_ppo": rl.env_steps / n_ticks,
+                        "wall_rl_ppo_s": rl.wall_s})
+        comp_rows.append({"tuner": "brax_ppo", "best_loss": rl.loss.total, "sims": rl.env_steps / n_ticks,
+                          "wall_s": rl.wall_s,
+                          "message": f"{rl.env_steps} env steps (ticks) = {rl.env_steps / n_ticks:.0f} episodes "
+                                     "of the horizon; wall time includes brax's compilation"})
     if polish is not None:
         comp_rows.append({"tuner": "pso_then_gradient", "best_loss": float(polish.loss),
                           "sims": metrics["sims_pso_then_gradient"],
@@ -336,7 +366,8 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
             comp, title=f"TRMS LQG tracker: best loss vs simulations / seconds (searches: median of "
                         f"{cfg.search_seeds} seeds)"),
         "responses": _plot_responses(problem, {"bryson start": theta0, "gradient": thetas["gradient"],
-                                               "pso": thetas["pso"]}),
+                                               "pso": thetas["pso"]},
+                                     {} if rl is None else {"brax PPO": rl.rollout}),
         "monte_carlo": _plot_mc({n: np.asarray(mc_res.raw.metrics[f"loss_{n}"]) for n in ("gradient", "pso")}),
     }
     winner = "gradient" if metrics["loss_gradient"] <= metrics["loss_pso"] else "PSO"
@@ -358,11 +389,34 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         f"{cfg.sign_smoothing} rad/s); 'loss_exact_friction' re-evaluates the designs with sgn",
         f"simulation: RK4 at {cfg.ts} s, horizon {cfg.t_final} s, noise key 0 for every tuner (common random numbers)",
     ]
+    if rl is None:
+        notes.append("brax PPO baseline skipped (ppo_timesteps = 0 or brax not installed: pip install -e '.[brax]')")
+    else:
+        notes.append(
+            f"brax PPO baseline: {rl.env_steps} env steps (= {rl.env_steps / n_ticks:.0f} episodes of {cfg.t_final} s), "
+            f"{rl.wall_s:.0f} s wall including compilation; deterministic policy scored with the same loss: "
+            f"{rl.loss.total:.4g} (exact friction {rl.loss_exact_friction:.4g}); the policy observes the true "
+            "state (no sensor noise, no observer)")
     return StudyResult(metrics=metrics,
                        tables={"tuners": comp_rows, "designs": designs, "monte_carlo": mc_rows,
                                "monte_carlo_samples": mc_samples, "search_seeds": seed_rows,
                                "effective_config": [dataclasses.asdict(cfg)]},
                        assumptions=ASSUMPTIONS, figures=figures, notes=notes)
+
+
+def _has_brax() -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec("brax") is not None
+
+
+def run_ppo(problem: TRMSTuning, cfg: Config) -> Any:
+    """Train and score the brax PPO baseline (:mod:`experiments.trms_ppo`; needs the brax extra)."""
+    from experiments.trms_ppo import PPOSettings, train_and_evaluate
+
+    return train_and_evaluate(problem, PPOSettings(
+        num_timesteps=cfg.ppo_timesteps, action_repeat=cfg.ppo_action_repeat, num_envs=cfg.ppo_num_envs,
+        learning_rate=cfg.ppo_learning_rate, seed=cfg.seed))
 
 
 def _gradient_cost_ratio(problem: TRMSTuning, theta0: np.ndarray, repeats: int = 3) -> float:
@@ -384,7 +438,7 @@ def _gradient_cost_ratio(problem: TRMSTuning, theta0: np.ndarray, repeats: int =
     return med(g) / med(f)
 
 
-def _plot_responses(problem: TRMSTuning, thetas: dict[str, np.ndarray]):
+def _plot_responses(problem: TRMSTuning, thetas: dict[str, np.ndarray], rollouts: dict[str, Any]):
     import matplotlib.pyplot as plt
 
     from jaxsim.core.rollout import Timing
@@ -408,12 +462,17 @@ def _plot_responses(problem: TRMSTuning, thetas: dict[str, np.ndarray]):
         for k in range(2):
             axes[k].plot(t, np.asarray(tr.y[:, k]), lw=1.2, label=name)
             axes[2 + k].plot(t, np.clip(np.asarray(tr.u[:, k]), -u_max, u_max), lw=1, label=name)
+    for name, ro in rollouts.items():  # policy rollouts (true state, no noise), every tick
+        for k in range(2):
+            axes[k].plot(ro.t, ro.x[:, k], lw=1.2, label=name)
+            axes[2 + k].plot(ro.t, ro.u[:, k], lw=1, label=name)
     for ax, lbl in zip(axes, ("pitch ψ, rad", "yaw φ, rad", "u1 (main), V", "u2 (tail), V")):
         ax.set_ylabel(lbl)
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
     axes[-1].set_xlabel("t, s")
-    fig.suptitle("TRMS, nonlinear plant with exact friction: LQG tracker designs")
+    fig.suptitle("TRMS, nonlinear plant with exact friction: LQG tracker designs"
+                 + (" and the brax PPO policy" if rollouts else ""))
     fig.tight_layout()
     return fig
 

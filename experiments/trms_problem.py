@@ -147,24 +147,39 @@ class TRMSTuning:
         return ClosedLoop(trms_plant(plant_params), ctrl, reference=self.reference,
                           sensor=angle_sensor(noise_std), estimator=est)
 
+    def step_terms(self, t: jax.Array, r: jax.Array, y: jax.Array, u: jax.Array, u_max: Any) -> jax.Array:
+        """Increments ``(3,)`` of ``(ITAE per step, ∫‖u_sat − u_eq‖², ∫ saturation excess²)`` over one
+        controller period starting at tick time ``t`` (s), with reference ``r (2,)``, true angles
+        ``y (2,)`` and commanded voltages ``u (2,)`` held over the period."""
+        ts, ref = self.scenario.ts, self.reference
+        since_switch = jnp.mod(t - ref.t0, 0.5 * ref.period)
+        u_sat = jnp.clip(u, -u_max, u_max)
+        return ts * jnp.stack([
+            jnp.sum(since_switch * jnp.abs(r - y)),
+            jnp.sum((u_sat - self.u_eq) ** 2),
+            jnp.sum(jnp.maximum(jnp.abs(u) - u_max, 0.0) ** 2),
+        ])
+
+    def step_loss(self, t: jax.Array, r: jax.Array, y: jax.Array, u: jax.Array, u_max: Any) -> jax.Array:
+        """The loss accrued over one controller period (the weighted :meth:`step_terms`; the loss of
+        a simulation is their sum plus the stability penalty of a linear design)."""
+        return self.combine(self.step_terms(t, r, y, u, u_max), 0.0).total
+
+    def loop_terms(self, loop: ClosedLoop, key: jax.Array) -> jax.Array:
+        """Sums ``(3,)`` of :meth:`step_terms` over one simulation of ``loop`` from the trim state."""
+        u_max = loop.plant.params.u_max
+
+        def running(acc, tick):
+            return acc + self.step_terms(tick.t, tick.r, tick.y, tick.u, u_max)
+
+        return fold(loop, self.x_eq, self.timing, running, jnp.zeros(3), key=key)[0]
+
     def rollout_terms(self, params: lqg_tracker.LQGTrackerParams, plant_params: Any, key: jax.Array,
                       noise_std: Any) -> jax.Array:
         """``(ITAE per step, ∫‖u_sat − u_eq‖², ∫ saturation excess²)`` of one simulation."""
-        ts, ref, u_max = self.scenario.ts, self.reference, plant_params.u_max
+        return self.loop_terms(self.closed_loop(params, plant_params, noise_std), key)
 
-        def running(acc, tick):
-            since_switch = jnp.mod(tick.t - ref.t0, 0.5 * ref.period)
-            u_sat = jnp.clip(tick.u, -u_max, u_max)
-            return acc + ts * jnp.stack([
-                jnp.sum(since_switch * jnp.abs(tick.r - tick.y)),
-                jnp.sum((u_sat - params.u_eq) ** 2),
-                jnp.sum(jnp.maximum(jnp.abs(tick.u) - u_max, 0.0) ** 2),
-            ])
-
-        loop = self.closed_loop(params, plant_params, noise_std)
-        return fold(loop, self.x_eq, self.timing, running, jnp.zeros(3), key=key)[0]
-
-    def combine(self, terms: jax.Array, stability: jax.Array) -> Breakdown:
+    def combine(self, terms: jax.Array, stability: Any) -> Breakdown:
         sc = self.scenario
         total = terms[0] + sc.rho_energy * terms[1] + sc.kappa_saturation * terms[2] + stability
         return Breakdown(terms[0], terms[1], terms[2], stability, total)

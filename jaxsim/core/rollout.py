@@ -134,6 +134,30 @@ class _Carry(NamedTuple):
     est: Any
 
 
+def hold_input(
+    plant: Plant,
+    x: jax.Array,
+    u: jax.Array,
+    t0: jax.Array,
+    dt: jax.Array,
+    substeps: int,
+    solver: Solver = RK4,
+    disturbance: Any = Constant(0.0),
+    actuate: Callable[[jax.Array, jax.Array], jax.Array] = subtract_input_disturbance,
+) -> jax.Array:
+    """Plant state after ``substeps`` solver steps of ``dt`` from ``(t0, x)`` with the input ``u``
+    held constant (zero-order hold); the disturbance is evaluated at every stage time and enters
+    through ``actuate(u, d)``.  The plant step of :func:`simulate` (and of ``jaxsim.envs``)."""
+
+    def field(t, z):
+        return plant.f(z, actuate(u, disturbance(t)), t)
+
+    def one(i, z):
+        return solver.step(field, t0 + i * dt, z, dt)
+
+    return jax.lax.fori_loop(0, substeps, one, x)
+
+
 def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | None, solver: Solver):
     """Validate, then return ``(tick, carry0, n_ticks)`` with ``tick(carry) -> (carry, Tick)``."""
     sensor_period = None if loop.sensor is None else loop.sensor.period
@@ -158,13 +182,7 @@ def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | N
         return loop.sensor.measure(loop.sensor.params, jax.random.fold_in(key, k), y, t)
 
     def advance_plant(x: jax.Array, u: jax.Array, t0: jax.Array) -> jax.Array:
-        def field(t, z):
-            return plant.f(z, loop.actuate(u, loop.disturbance(t)), t)
-
-        def one(i, z):
-            return solver.step(field, t0 + i * h, z, h)
-
-        return jax.lax.fori_loop(0, substeps, one, x)
+        return hold_input(plant, x, u, t0, h, substeps, solver, loop.disturbance, loop.actuate)
 
     def tick(c: _Carry) -> tuple[_Carry, Tick]:
         t = c.k * ts

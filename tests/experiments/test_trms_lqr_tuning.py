@@ -47,3 +47,27 @@ def test_metrics_assumptions_and_outputs(study_output):
     for png in ("convergence", "responses", "monte_carlo"):
         assert (study_output / f"{png}.png").stat().st_size > 10_000
     assert (study_output / "monte_carlo_samples.csv").exists()
+
+
+@pytest.mark.slow
+def test_ppo_baseline_row(study_output):
+    """The brax PPO baseline ran with its stated budget and was scored with the study's loss."""
+    pytest.importorskip("brax")
+    res = json.loads((study_output / "results.json").read_text())
+    m, cfg = res["metrics"], res["tables"]["effective_config"][0]
+    n_ticks = round(cfg["t_final"] / cfg["ts"])
+    assert m["env_steps_rl_ppo"] >= cfg["ppo_timesteps"]
+    assert m["sims_rl_ppo"] == pytest.approx(m["env_steps_rl_ppo"] / n_ticks)
+    assert m["wall_rl_ppo_s"] > 0
+    for key in ("loss_rl_ppo", "loss_exact_friction_rl_ppo"):
+        assert math.isfinite(m[key]) and m[key] > 0, key
+    # the env's rewards along the policy rollout sum to minus the study's loss of the replayed inputs
+    assert m["return_rl_ppo"] == pytest.approx(-m["loss_rl_ppo"], rel=1e-9)
+    row = next(r for r in res["tables"]["tuners"] if r["tuner"] == "brax_ppo")
+    assert row["best_loss"] == m["loss_rl_ppo"] and row["sims"] == m["sims_rl_ppo"]
+    design = next(r for r in res["tables"]["designs"] if r["design"] == "brax_ppo")
+    # the loss is the study's: its terms recombine with the scenario's weights (no stability term)
+    total = design["itae"] + cfg["rho_energy"] * design["energy"] + cfg["kappa_saturation"] * design["saturation"]
+    assert design["loss"] == pytest.approx(total, rel=1e-12)
+    assert design["saturation"] == 0.0  # actions are mapped inside ±u_max
+    assert res["assumptions"]["ppo"]["why"]
