@@ -247,20 +247,13 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     extra_seeds = [cfg.seed + k for k in range(1, cfg.search_seeds)]
     bar = progress(total=len(runs) + 3 * len(extra_seeds) + 3, desc="trms_lqr_tuning", unit="run")
 
-    def counted(fn):
-        def wrapped():
-            out = fn()
-            bar.update(1)
-            return out
-
-        return wrapped
-
-    comp = compare({name: counted(fn) for name, fn in runs.items()})
+    comp = compare(runs, on_done=lambda _: bar.update(1))
     # the searches are stochastic: repeat them with more seeds and report the median run everywhere
     runs_by_seed = {name: [(cfg.seed, comp.results[name])] for name in SEARCHES}
     for seed in extra_seeds:
         for name, fn in searches(cfg, problem, batched, seed).items():
-            runs_by_seed[name].append((seed, counted(fn)()))
+            runs_by_seed[name].append((seed, fn()))
+            bar.update(1)
     res = {"gradient": comp.results["gradient"],
            **{name: _median_run(runs) for name, runs in runs_by_seed.items()}}
     comp = compare({name: (lambda r=r: r) for name, r in res.items()})  # table and curves of these runs

@@ -611,7 +611,6 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     t0 = time.perf_counter()
     loss = loss_monte_carlo(cfg, {"fuzzy": sel0, "fuzzy_tuned": tuned}, runs, progress)
     loss_s = time.perf_counter() - t0
-    gi = list(cfg.gates).index(cfg.gate)
 
     rows = envelope_rows(cfg, env)
     comparison = tracker_rows(cfg, env, loss, names)

@@ -20,8 +20,6 @@ Usage: ``python -m experiments.benchmarks.mjx_vs_ode [--batches 1 1024] [--steps
 from __future__ import annotations
 
 import argparse
-import json
-import statistics
 import time
 
 import jax
@@ -34,6 +32,7 @@ import jaxsim  # noqa: F401  (float64)
 from jaxsim.core.integrators import EULER, RK4
 from jaxsim.mjx.trms import TO_ODE, trms_mjcf, trms_mjx_plant
 from jaxsim.plants import trms
+from experiments.benchmarks.timing import median_time, write_json
 
 H = 1e-3  # s, env-step
 
@@ -82,12 +81,7 @@ def _timed(fn, repeats: int) -> tuple[float, float]:
     start = time.perf_counter()
     jax.block_until_ready(fn())
     first = time.perf_counter() - start
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        jax.block_until_ready(fn())
-        times.append(time.perf_counter() - start)
-    return first, statistics.median(times)
+    return first, median_time(lambda: jax.block_until_ready(fn()), repeats)
 
 
 def main(argv=None) -> dict:
@@ -132,9 +126,7 @@ def main(argv=None) -> dict:
               f"2 threads {row['c_mujoco_2t'] / row['ode_rk4']:.3g}×;  "
               f"compile s: ode {row['ode_rk4_compile_s']:.1f}, mjx {row['mjx_compile_s']:.1f}")
     out = {"h": H, "rows": rows, "devices": str(jax.devices())}
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(out, fh, indent=2)
+    write_json(args.json, out)
     return out
 
 

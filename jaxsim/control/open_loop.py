@@ -1,7 +1,9 @@
-"""Open-loop "controller" that plays a given input sequence (ignores reference and measurement).
+"""Open-loop controllers (they ignore the measurement): play an input sequence, or pass the reference through.
 
 Useful to drive a closed-loop rollout with recorded or random inputs, e.g. to compare a plant
-under the same inputs through two paths (``simulate`` vs an env, ODE vs another model).
+under the same inputs through two paths (``simulate`` vs an env, ODE vs an MJCF model).
+:func:`open_loop` plays ``u_seq[k]`` at controller tick ``k``; :func:`feedforward` outputs
+``u_k = r(t_k)``, so the reference signal *is* the input (held by zero-order hold over each period).
 """
 
 from __future__ import annotations
@@ -28,3 +30,16 @@ def open_loop(u_seq: jax.Array) -> Controller:
         raise ValueError(f"u_seq: expected shape (N, m) with N ≥ 1, got {tuple(u_seq.shape)}")
     check_finite("u_seq", u_seq)
     return Controller(u_seq, _init, _step, name="open_loop")
+
+
+def _ff_init(params: None, r0: jax.Array, y0: jax.Array) -> tuple:
+    return ()
+
+
+def _ff_step(params: None, state: tuple, r: jax.Array, y: jax.Array, dt: float) -> tuple[tuple, jax.Array]:
+    return state, r
+
+
+def feedforward() -> Controller:
+    """A stateless controller returning the reference as the plant input."""
+    return Controller(params=None, init=_ff_init, step=_ff_step, name="feedforward")

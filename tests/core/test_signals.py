@@ -3,7 +3,6 @@
 import jax
 import jax.numpy as jnp
 import numpy as np
-import pytest
 
 from jaxsim.core.signals import Constant, Piecewise, Ramp, Sine, Square, Step, Sum, sample
 

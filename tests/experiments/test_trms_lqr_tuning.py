@@ -2,12 +2,10 @@
 
 import json
 import math
-import subprocess
-import sys
 
 import pytest
 
-from tests.conftest import ROOT
+from tests.experiments.study_cli import run_quick_study
 
 REQUIRED = ("loss_gradient", "loss_pso", "loss_random", "sims_gradient", "sims_pso", "wall_gradient_s",
             "wall_pso_s", "mc_loss_p95_gradient", "mc_loss_p95_pso")
@@ -16,11 +14,7 @@ REQUIRED = ("loss_gradient", "loss_pso", "loss_random", "sims_gradient", "sims_p
 @pytest.fixture(scope="module")
 def study_output(tmp_path_factory):
     out = tmp_path_factory.mktemp("trms")
-    proc = subprocess.run(
-        [sys.executable, "-m", "experiments", "run", "trms_lqr_tuning", "--quick", "--out", str(out)],
-        capture_output=True, text=True, cwd=ROOT, timeout=900,
-    )
-    assert proc.returncode == 0, proc.stderr[-3000:]
+    run_quick_study("trms_lqr_tuning", out)
     return out
 
 

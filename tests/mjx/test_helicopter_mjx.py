@@ -10,7 +10,7 @@ pytest.importorskip("mujoco.mjx")
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
-from jaxsim.control.feedforward import feedforward  # noqa: E402
+from jaxsim.control.open_loop import feedforward  # noqa: E402
 from jaxsim.core.integrators import EULER, HEUN  # noqa: E402
 from jaxsim.core.rollout import ClosedLoop, Timing, simulate  # noqa: E402
 from jaxsim.core.signals import Sine  # noqa: E402

@@ -14,7 +14,7 @@ import jax.numpy as jnp  # noqa: E402
 from jaxsim.core.integrators import EULER  # noqa: E402
 from jaxsim.core.rollout import ClosedLoop, Timing, simulate  # noqa: E402
 from jaxsim.core.signals import Sine  # noqa: E402
-from jaxsim.control.feedforward import feedforward  # noqa: E402
+from jaxsim.control.open_loop import feedforward  # noqa: E402
 from jaxsim.mjx import mjcf_params, mjcf_plant, open_loop, qpos_rate  # noqa: E402
 
 # A damped double pendulum (two hinges, two motors) next to a free-floating body (quaternion qpos).
