@@ -62,38 +62,40 @@ def _noise_input(a, c, w, g):
     return a, c, g @ w @ g.T
 
 
-def _checked_dual(a, c, w, v, g, discrete: bool, names: tuple[str, str]):
+def _checked_dual(a, c, w, v, g, discrete: bool, names: tuple[str, str, str, str]):
+    an, cn, wn, vn = names
     a, c, gwg = _noise_input(a, c, w, g)
     if c.ndim != 2 or (a.ndim == 2 and c.shape[1] != a.shape[0]):
-        raise ValueError(f"c: expected shape (p, {a.shape[0]}), got {tuple(c.shape)}")
-    wn, vn = names
-    at, ct, gwg, v = prepare_riccati_inputs(a.T, c.T, gwg, v, names=("a", "c", wn, vn))
+        raise ValueError(f"{cn}: expected shape (p, {a.shape[0]}), got {tuple(c.shape)}")
+    at, ct, gwg, v = prepare_riccati_inputs(a.T, c.T, gwg, v, names=names)
     check_positive_semidefinite(wn, gwg)
     if is_concrete((at, ct, gwg)):
-        check_detectable("a", np.asarray(at).T, "c", np.asarray(ct).T, discrete=discrete)
-        check_no_unobservable_boundary_modes("a", np.asarray(at).T, wn, np.asarray(gwg), discrete=discrete,
+        check_detectable(an, np.asarray(at).T, cn, np.asarray(ct).T, discrete=discrete)
+        check_no_unobservable_boundary_modes(an, np.asarray(at).T, wn, np.asarray(gwg), discrete=discrete,
                                              dual=True)
     return at, ct, gwg, v
 
 
-def kalman_bucy(a, c, w, v, g=None) -> KalmanBucyGain:
+def kalman_bucy(a, c, w, v, g=None, *, names: tuple[str, str, str, str] = ("a", "c", "w", "v")) -> KalmanBucyGain:
     """Steady-state Kalman–Bucy gain.
 
     Args:
         a: ``(n, n)``; c: ``(p, n)``; w: process-noise intensity ``(q, q)`` (``(n, n)`` without
             ``g``), symmetric ⪰ 0; v: measurement-noise intensity ``(p, p)``, symmetric ≻ 0;
         g: optional noise input matrix ``(n, q)``.
+        names: the caller's names of ``(a, c, w, v)``, used in error messages.
     """
-    at, ct, gwg, v = _checked_dual(a, c, w, v, g, discrete=False, names=("w", "v"))
-    p = solve_continuous_are(at, ct, gwg, v, names=("a", "c", "w", "v"))
+    at, ct, gwg, v = _checked_dual(a, c, w, v, g, discrete=False, names=names)
+    p = solve_continuous_are(at, ct, gwg, v, names=names)
     return KalmanBucyGain(cho_solve(cho_factor(v), ct.T @ p).T, p)
 
 
-def discrete_kalman(a, c, q, r, g=None) -> DiscreteKalmanGain:
+def discrete_kalman(a, c, q, r, g=None, *,
+                    names: tuple[str, str, str, str] = ("a", "c", "q", "r")) -> DiscreteKalmanGain:
     """Steady-state discrete Kalman filter gain and covariances (argument shapes as :func:`kalman_bucy`,
     with ``q``, ``r`` the process and measurement covariances per step)."""
-    at, ct, gqg, r = _checked_dual(a, c, q, r, g, discrete=True, names=("q", "r"))
-    p_prior = solve_discrete_are(at, ct, gqg, r, names=("a", "c", "q", "r"))
+    at, ct, gqg, r = _checked_dual(a, c, q, r, g, discrete=True, names=names)
+    p_prior = solve_discrete_are(at, ct, gqg, r, names=names)
     c = ct.T
     s = c @ p_prior @ c.T + r
     k = cho_solve(cho_factor(s), c @ p_prior).T

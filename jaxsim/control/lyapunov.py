@@ -43,7 +43,12 @@ def solve_continuous_lyapunov(a: jax.Array, q: jax.Array) -> jax.Array:
     Returns:
         ``X`` of shape ``(n, n)``.
     """
-    a, q = _check(a, q)
+    return continuous_lyapunov_unchecked(*_check(a, q))
+
+
+def continuous_lyapunov_unchecked(a: jax.Array, q: jax.Array) -> jax.Array:
+    """:func:`solve_continuous_lyapunov` without input checks, for callers whose ``a`` may be NaN by
+    design (the tangent equations of a failed Riccati solve propagate NaN instead of raising)."""
     return jax.lax.custom_linear_solve(
         lambda x: a @ x + x @ a.T,
         q,
@@ -54,7 +59,11 @@ def solve_continuous_lyapunov(a: jax.Array, q: jax.Array) -> jax.Array:
 
 def solve_discrete_lyapunov(a: jax.Array, q: jax.Array) -> jax.Array:
     """Solve ``A X Aᵀ − X + Q = 0`` for ``X`` (shapes as in :func:`solve_continuous_lyapunov`)."""
-    a, q = _check(a, q)
+    return discrete_lyapunov_unchecked(*_check(a, q))
+
+
+def discrete_lyapunov_unchecked(a: jax.Array, q: jax.Array) -> jax.Array:
+    """:func:`solve_discrete_lyapunov` without input checks (see :func:`continuous_lyapunov_unchecked`)."""
     return jax.lax.custom_linear_solve(
         lambda x: x - a @ x @ a.T,
         q,

@@ -42,7 +42,7 @@ import numpy as np
 from jax.scipy.linalg import cho_factor, cho_solve, lu_factor, lu_solve
 
 from jaxsim.control import _bartels_stewart as bs
-from jaxsim.control.lyapunov import solve_continuous_lyapunov, solve_discrete_lyapunov
+from jaxsim.control.lyapunov import continuous_lyapunov_unchecked, discrete_lyapunov_unchecked
 from jaxsim.control.pbh import check_stabilizable
 from jaxsim.core.validation import check_finite, check_square, is_concrete
 
@@ -230,7 +230,7 @@ def _care_jvp(primals, tangents):
     x = _care(a, b, q, r)
     _, rhs = jax.jvp(lambda *p: care_residual(x, *p), primals, tangents)
     acl = a - gain_matrix(b, r) @ x
-    return x, _sym(solve_continuous_lyapunov(acl.T, -rhs))
+    return x, _sym(continuous_lyapunov_unchecked(acl.T, -rhs))
 
 
 @jax.custom_jvp
@@ -244,7 +244,7 @@ def _dare_jvp(primals, tangents):
     x = _dare(a, b, q, r)
     _, rhs = jax.jvp(lambda *p: dare_residual(x, *p), primals, tangents)
     acl = a - b @ dare_gain(x, a, b, r)
-    return x, _sym(solve_discrete_lyapunov(acl.T, rhs))
+    return x, _sym(discrete_lyapunov_unchecked(acl.T, rhs))
 
 
 # ----------------------------------------------------------------------------- public API

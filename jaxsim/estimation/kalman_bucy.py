@@ -106,5 +106,5 @@ def steady_state_kalman_bucy(
         raise ValueError(f"C: expected shape (p, {A.shape[0]}), got {tuple(C.shape)}")
     check_covariance("Qc", Qc)
     check_covariance("Rc", Rc, C.shape[0])
-    gain = kalman_bucy(A, C, Qc, Rc, G)
+    gain = kalman_bucy(A, C, Qc, Rc, G, names=("A", "C", "Qc", "Rc"))
     return gain.p, gain.l

@@ -39,6 +39,6 @@ def steady_state_kalman(F: Any, Q: Any, H: Any, R: Any) -> SteadyStateKalman:
     check_finite("H", H)
     check_covariance("Q", Q, n)
     check_covariance("R", R, H.shape[0])
-    gain = discrete_kalman(F, H, Q, R)
+    gain = discrete_kalman(F, H, Q, R, names=("F", "H", "Q", "R"))
     s = symmetrize(H @ gain.p_prior @ H.T + R)
     return SteadyStateKalman(gain.p_prior, gain.p_post, gain.k, s)

@@ -125,3 +125,16 @@ def test_gradient_of_a_batched_cost_equals_the_sum_of_single_gradients():
     batched = jax.jit(jax.vmap(jax.grad(cost)))(thetas)
     for i in range(5):
         np.testing.assert_allclose(batched[i], jax.grad(cost)(thetas[i]), rtol=1e-12)
+
+
+@pytest.mark.parametrize("discrete", [False, True])
+def test_gradient_of_a_failed_solve_is_nan_not_an_error_about_internals(discrete):
+    # A = 0 (resp. 1) with q = 0: the only solution X = 0 leaves the mode on the stability boundary,
+    # so there is no stabilising solution; traced (grad) solves return NaN, as under jit.
+    a = jnp.array([[1.0 if discrete else 0.0]])
+    solve = solve_discrete_are if discrete else solve_continuous_are
+    f = lambda q: solve(a, jnp.eye(1), q, jnp.eye(1)).sum()  # noqa: E731
+    with pytest.raises(ValueError, match="no stabilising solution"):
+        f(jnp.zeros((1, 1)))
+    assert np.isnan(jax.grad(f)(jnp.zeros((1, 1)))).all()
+    assert np.isnan(jax.jit(jax.grad(f))(jnp.zeros((1, 1)))).all()

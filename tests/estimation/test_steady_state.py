@@ -60,3 +60,11 @@ def test_steady_state_bad_input():
         steady_state_kalman(np.eye(2), np.array([[1.0, 0.5], [0.0, 1.0]]), np.eye(2), np.eye(2))
     with pytest.raises(ValueError, match="^H: expected shape"):
         steady_state_kalman(np.eye(2), np.eye(2), np.ones((1, 3)), np.eye(1))
+
+
+def test_errors_name_the_callers_arguments():
+    # the unstable mode 2 is invisible to H: the message names F and H, not the dual pair's a/c
+    with pytest.raises(ValueError, match=r"^\(F, H\): not detectable"):
+        steady_state_kalman(np.diag([2.0, 0.5]), np.eye(2), np.array([[0.0, 1.0]]), np.eye(1))
+    with pytest.raises(ValueError, match=r"^\(A, C\): not detectable"):
+        steady_state_kalman_bucy(np.diag([1.0, -1.0]), np.array([[0.0, 1.0]]), np.eye(2), np.eye(1))
