@@ -101,9 +101,12 @@ ASSUMPTIONS = {
         "centre of the pitch wave; with kc = −0.2 the tail rotor can only balance the reaction torque "
         "for pitch ≲ 0.15 rad, so the references stay inside that trim envelope"),
     "references": assumption(
-        "pitch square wave −0.2 ↔ +0.1 rad, period 20 s; yaw ±0.2 rad, period 30 s, delayed 5 s",
+        "pitch square wave −0.2 ↔ +0.1 rad, period 20 s; yaw ±0.2 rad, period 30 s, phase-shifted 5 s "
+        "(yaw is −0.2 from t = 0 and switches at 5, 20, 35, 50 s; pitch switches every 10 s)",
         "the paper gives none; spec §B1.4 suggests ±0.2 rad square waves, the pitch wave is shifted "
-        "into the trim envelope and the yaw wave delayed so the steps interleave (cross-coupling)"),
+        "into the trim envelope and the yaw wave phase-shifted so most steps do not coincide "
+        "(they do at 20 and 50 s); the ITAE clock of each axis is the time since its wave's last "
+        "switch, which for yaw before 5 s is the periodic wave's switch at −10 s"),
     "sample_time": assumption(0.01, "s, controller period and RK4 plant step (spec §B1.4 suggests 0.01 s)"),
     "sensor_noise": assumption(
         2e-3, "rad, white noise on both angles (encoder-class resolution); Kalman–Bucy V = σ²·Ts"),

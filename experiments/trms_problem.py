@@ -150,7 +150,9 @@ class TRMSTuning:
     def step_terms(self, t: jax.Array, r: jax.Array, y: jax.Array, u: jax.Array, u_max: Any) -> jax.Array:
         """Increments ``(3,)`` of ``(ITAE per step, ∫‖u_sat − u_eq‖², ∫ saturation excess²)`` over one
         controller period starting at tick time ``t`` (s), with reference ``r (2,)``, true angles
-        ``y (2,)`` and commanded voltages ``u (2,)`` held over the period."""
+        ``y (2,)`` and commanded voltages ``u (2,)`` held over the period.  The ITAE weight of each
+        axis is the time since its square wave's last switch, the wave taken as periodic for all t
+        (so before the yaw wave's first switch at ``t0`` its weight is ``t − t0 + period/2``)."""
         ts, ref = self.scenario.ts, self.reference
         since_switch = jnp.mod(t - ref.t0, 0.5 * ref.period)
         u_sat = jnp.clip(u, -u_max, u_max)
