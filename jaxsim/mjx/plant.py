@@ -13,7 +13,7 @@ Two vector fields are offered (``field=`` of :func:`mjcf_plant`):
   integrator and constraint solver); ``jacfwd`` of it differentiates through ``mjx.step`` and gives
   ``(Φ − I)/h``, the discrete transition matrix in the units of ``A``.
 
-:func:`step` and :func:`open_loop` advance the discrete map directly (``lax.scan`` of ``mjx.step``).
+:func:`step` and :func:`step_sequence` advance the discrete map directly (``lax.scan`` of ``mjx.step``).
 Everything composes with ``jit``/``vmap``/``jacfwd``; the MJX model and a data template are pytree
 leaves of the plant's params, the layout (sizes, names) is static.
 """
@@ -171,7 +171,7 @@ def mjcf_plant(
                  n_outputs=lay.n_outputs, name=name)
 
 
-def open_loop(params: MJCFParams, x0: jax.Array, controls: jax.Array) -> jax.Array:
+def step_sequence(params: MJCFParams, x0: jax.Array, controls: jax.Array) -> jax.Array:
     """States after each of ``K`` ``mjx.step``s under ``controls (K, nu)``: shape ``(K, nq + nv)``."""
     controls = jnp.asarray(controls)
     if controls.ndim != 2 or controls.shape[1] != params.layout.nu:

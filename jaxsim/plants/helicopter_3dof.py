@@ -75,7 +75,9 @@ def derived(p: HelicopterParams) -> dict[str, jax.Array]:
     m_h = p.jp / p.lh**2
     lw = (m_h * p.la - p.la * p.fg / GRAVITY) / p.m_w
     j_arm = p.je - m_h * p.la**2 - p.m_w * lw**2
-    b = p.damping * jnp.stack([jnp.asarray(p.je, float), jnp.asarray(p.je, float), jnp.asarray(p.jp, float)])
+    # B = damping × axis inertia at rest: travel turns the arm and the pitch body (je + jp)
+    b = p.damping * jnp.stack([jnp.asarray(p.je + p.jp, float), jnp.asarray(p.je, float),
+                               jnp.asarray(p.jp, float)])
     return {"m_h": m_h, "lw": lw, "j_arm": j_arm, "b": b}
 
 

@@ -15,7 +15,7 @@ from jaxsim.core.integrators import EULER  # noqa: E402
 from jaxsim.core.rollout import ClosedLoop, Timing, simulate  # noqa: E402
 from jaxsim.core.signals import Sine  # noqa: E402
 from jaxsim.control.open_loop import feedforward  # noqa: E402
-from jaxsim.mjx import mjcf_params, mjcf_plant, open_loop, qpos_rate  # noqa: E402
+from jaxsim.mjx import mjcf_params, mjcf_plant, qpos_rate, step_sequence  # noqa: E402
 
 # A damped double pendulum (two hinges, two motors) next to a free-floating body (quaternion qpos).
 XML = """<mujoco>
@@ -56,12 +56,12 @@ def _initial_state(model) -> np.ndarray:
     return np.concatenate([data.qpos, data.qvel])
 
 
-def test_open_loop_equals_c_mujoco(model):
+def test_step_sequence_equals_c_mujoco(model):
     """``lax.scan`` of ``mjx.step`` reproduces C MuJoCo's ``mj_step`` (same integrator)."""
     x0 = _initial_state(model)
     k = np.arange(200)
     controls = np.stack([0.3 * np.sin(0.05 * k), -0.2 * np.cos(0.03 * k)], axis=1)
-    xs = np.asarray(jax.jit(open_loop)(mjcf_params(model), jnp.asarray(x0), jnp.asarray(controls)))
+    xs = np.asarray(jax.jit(step_sequence)(mjcf_params(model), jnp.asarray(x0), jnp.asarray(controls)))
     data = mujoco.MjData(model)
     data.qpos[:], data.qvel[:] = x0[: model.nq], x0[model.nq:]
     expected = []
