@@ -107,9 +107,10 @@ def train_and_evaluate(problem: TRMSTuning, settings: PPOSettings) -> PPOResult:
     env_steps = int(np.ceil(settings.num_timesteps / per_step)) * per_step  # brax runs whole training steps
     policy = make_policy(params, deterministic=True)
 
-    smooth = policy_rollout(trms_env(problem), policy, n_ticks, settings.action_repeat)
+    env = trms_env(problem)
+    smooth = policy_rollout(env, policy, n_ticks, settings.action_repeat)
     exact = policy_rollout(trms_env(problem, exact_friction=True), policy, n_ticks, settings.action_repeat)
-    loop = ClosedLoop(trms_env(problem).task.plant, open_loop(jnp.asarray(smooth.u)), reference=problem.reference)
+    loop = ClosedLoop(env.task.plant, open_loop(jnp.asarray(smooth.u)), reference=problem.reference)
     terms = jax.jit(problem.loop_terms)(loop, jax.random.PRNGKey(0))
     loss = problem.combine(terms, jnp.zeros(()))
     return PPOResult(loss=Breakdown(*(float(v) for v in loss)), loss_exact_friction=-float(np.sum(exact.reward)),

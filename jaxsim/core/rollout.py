@@ -147,7 +147,10 @@ def hold_input(
 ) -> jax.Array:
     """Plant state after ``substeps`` solver steps of ``dt`` from ``(t0, x)`` with the input ``u``
     held constant (zero-order hold); the disturbance is evaluated at every stage time and enters
-    through ``actuate(u, d)``.  The plant step of :func:`simulate` (and of ``jaxsim.envs``)."""
+    through ``actuate(u, d)``.  The plant step of :func:`simulate` (and of ``jaxsim.envs``).
+
+    Shapes: ``x (n,)``, ``u (m,)``; ``t0`` and the solver step ``dt`` in seconds (the held interval is
+    ``substeps · dt``); returns ``x (n,)``."""
 
     def field(t, z):
         return plant.f(z, actuate(u, disturbance(t)), t)

@@ -39,7 +39,9 @@ def trms_task(problem: Any = None, exact_friction: bool = False, x0_spread: Any 
     def observe(x: jax.Array, r: jax.Array, t: jax.Array) -> jax.Array:
         return jnp.concatenate([x - x_eq, r - plant.h(x)])
 
-    return Task(plant=plant, step_loss=step_loss, u_low=-u_max, u_high=u_max, dt=problem.scenario.ts,
+    timing = problem.timing  # the study's own periods, so env steps are the study's ticks
+    _, substeps, _ = timing.resolve(None)
+    return Task(plant=plant, step_loss=step_loss, u_low=-u_max, u_high=u_max, dt=timing.ts, substeps=substeps,
                 x0=x_eq, x0_spread=x0_spread, reference=problem.reference, observe=observe)
 
 
