@@ -206,31 +206,43 @@ class Track(NamedTuple):
     predicted: jax.Array
 
 
+def _one_plot_start(sc: Scenario, velocity_prior_std: float, extra_std: tuple[float, ...] = ()) -> tuple:
+    """The belief after the first plot: position ``z_0`` with covariance ``R``, zero velocity (and any
+    ``extra_std`` states) with the given prior spreads.  The filters then run on ``z[1:]`` from its
+    one-scan prediction, so ``z_0`` is used exactly once."""
+    stds = jnp.asarray([velocity_prior_std, velocity_prior_std, *extra_std], float)
+    m0 = jnp.concatenate([sc.z[0], jnp.zeros(stds.shape[0])])
+    P0 = jax.scipy.linalg.block_diag(sc.R, jnp.diag(stds**2))
+    return m0, P0
+
+
+def _prepend_first_plot(sc: Scenario, positions: jax.Array, predicted: jax.Array) -> Track:
+    """Scan 0 of a one-plot start: estimate = plot, and the plot is its own "prediction" (miss 0)."""
+    return Track(jnp.concatenate([sc.z[:1], positions]), jnp.concatenate([sc.z[:1], predicted]))
+
+
 def kalman_track(cfg: Config, sc: Scenario) -> Track:
     """CV Kalman filter (Joseph form) from a one-plot start (velocity prior ``velocity_prior_std``)."""
     dt = cfg.scan_period
-    F, Q = cv_transition(dt), cv_process_noise(dt, cfg.kalman_q)
-    m0 = jnp.concatenate([sc.z[0], jnp.zeros(2)])
-    P0 = jax.scipy.linalg.block_diag(sc.R, cfg.velocity_prior_std**2 * jnp.eye(2))
-    res = kalman_filter(LinearGaussianSSM(jnp.asarray(F), jnp.asarray(Q), jnp.asarray(POSITION_2D), sc.R, m0, P0), sc.z)
-    return Track(res.means[:, :2], res.predicted_means[:, :2])
+    F, Q = jnp.asarray(cv_transition(dt)), jnp.asarray(cv_process_noise(dt, cfg.kalman_q))
+    m0, P0 = _one_plot_start(sc, cfg.velocity_prior_std)
+    m1, P1 = F @ m0, F @ P0 @ F.T + Q
+    res = kalman_filter(LinearGaussianSSM(F, Q, jnp.asarray(POSITION_2D), sc.R, m1, P1), sc.z[1:])
+    return _prepend_first_plot(sc, res.means[:, :2], res.predicted_means[:, :2])
 
 
 def imm_track(cfg: Config, sc: Scenario) -> Track:
     """CV + coordinated-turn IMM from a one-plot start; the prediction is the mixture's."""
     model = cv_ct_imm(cfg.scan_period, cfg.imm_q_cv, cfg.imm_q_ct, cfg.imm_q_turn_rate, sc.R, cfg.imm_switch_prob)
-    m0 = jnp.concatenate([sc.z[0], jnp.zeros(3)])
-    P0 = jax.scipy.linalg.block_diag(sc.R, cfg.velocity_prior_std**2 * jnp.eye(2),
-                                     jnp.eye(1) * cfg.turn_rate_prior_std**2)
-    init = imm_init(jnp.stack([m0, m0]), jnp.stack([P0, P0]), jnp.array([0.5, 0.5]))
+    m0, P0 = _one_plot_start(sc, cfg.velocity_prior_std, (cfg.turn_rate_prior_std,))
+    prior = imm_predict(model, imm_init(jnp.stack([m0, m0]), jnp.stack([P0, P0]), jnp.array([0.5, 0.5])))
 
     def step(state, y):
         post, _ = imm_update(model, state, y)
-        prior = imm_predict(model, post)
-        return prior, (imm_estimate(post).mean[:2], imm_estimate(prior).mean[:2])
+        return imm_predict(model, post), (imm_estimate(post).mean[:2], imm_estimate(state).mean[:2])
 
-    _, (pos, pred) = jax.lax.scan(step, init, sc.z)
-    return Track(pos, jnp.concatenate([pred[:1], pred[:-1]]))
+    _, (pos, pred) = jax.lax.scan(step, prior, sc.z[1:])
+    return _prepend_first_plot(sc, pos, pred)
 
 
 def window_tracks(cfg: Config, sc: Scenario, selectors: dict[str, WindowSelector], *,
