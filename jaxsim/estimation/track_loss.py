@@ -18,13 +18,13 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
+from jaxsim.core.safe_norm import safe_norm
 from jaxsim.core.validation import check_positive
 
 
 def miss_distances(measurements: Any, predictions: Any) -> jax.Array:
     """``‖z_t − ẑ_{t|t−1}‖`` ``(T,)`` from plots ``(T, 2)`` and the predictions made for them ``(T, 2)``."""
-    d = jnp.asarray(measurements) - jnp.asarray(predictions)
-    return jnp.sqrt(jnp.sum(d * d, axis=-1))
+    return safe_norm(jnp.asarray(measurements) - jnp.asarray(predictions))
 
 
 def _mask(distances: jax.Array, mask: Any) -> jax.Array:

@@ -40,6 +40,7 @@ import numpy as np
 from jaxsim.control.fuzzy import evaluate, rule_base, sugeno, terms
 from jaxsim.control.fuzzy.inference import FuzzySystem
 from jaxsim.core.pytree import pytree_dataclass, static_field
+from jaxsim.core.safe_norm import safe_norm
 from jaxsim.core.validation import check_finite, check_positive
 from jaxsim.estimation.alpha_beta import alpha_beta_update, growing_memory_gains
 
@@ -108,7 +109,7 @@ def window_bank_filter(z: Any, max_window: int, dt: Any) -> WindowBank:
     pred = pos + vel * dt
     prev = jnp.concatenate([pred[:1], pred[:-1]], axis=0)
     valid = jnp.asarray(np.arange(n_scans) >= 2)
-    resid = jnp.sqrt(jnp.sum((z[:, None, :] - prev) ** 2, axis=-1))
+    resid = safe_norm(z[:, None, :] - prev)
     return WindowBank(pos, vel, pred, jnp.where(valid[:, None], resid, 0.0), valid)
 
 

@@ -31,6 +31,16 @@ def test_soft_track_loss_tends_to_the_event_and_is_a_probability():
     np.testing.assert_allclose(soft_track_loss(d, 30.0, 5.0), 1.0 - np.prod(1.0 - p), rtol=1e-12)
 
 
+def test_miss_distance_gradient_is_finite_at_zero_and_the_unit_vector_elsewhere():
+    z = jnp.array([[1.0, 2.0], [3.0, 4.0]])
+    pred = jnp.array([[1.0, 2.0], [0.0, 0.0]])  # scan 0: the plot is its own prediction (d = 0)
+    g = jax.grad(lambda z: jnp.sum(miss_distances(z, pred)))(z)
+    np.testing.assert_array_equal(g[0], [0.0, 0.0])
+    np.testing.assert_allclose(g[1], [0.6, 0.8], rtol=1e-12)
+    g_soft = jax.grad(lambda z: soft_track_loss(miss_distances(z, pred), 4.0, 1.0))(z)
+    assert np.all(np.isfinite(g_soft))
+
+
 @pytest.mark.parametrize("gate", [0.0, -10.0])
 def test_non_positive_gate_raises(gate):
     with pytest.raises(ValueError, match="gate"):
