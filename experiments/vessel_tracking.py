@@ -309,23 +309,20 @@ def envelope_metric(cfg: Config) -> Callable[[jax.Array, dict[str, Any]], dict[s
     def metric(key: jax.Array, p: dict[str, Any]) -> dict[str, Any]:
         sc = simulate(cfg, key, p)
         tracks, selections = all_tracks(cfg, sc, {"fuzzy": sel})
-        checked, straight, turn = phases(cfg, sc)
+        _, straight, turn = phases(cfg, sc)
         on_arc = (jnp.asarray(sc.times) >= sc.turn_start) & (jnp.asarray(sc.times) <= sc.turn_end)
-        out: dict[str, Any] = {"err": {}, "rms_straight": {}, "max_straight": {}, "max_turn": {}, "max_miss": {}}
+        out: dict[str, Any] = {"err": {}, "rms_straight": {}, "max_straight": {}, "max_turn": {}}
         for name, tr in tracks.items():
             err = jnp.linalg.norm(tr.positions - sc.position, axis=-1)
             out["err"][name] = err
             out["rms_straight"][name] = _masked_rms(err, straight)
             out["max_straight"][name] = _masked_max(err, straight)
             out["max_turn"][name] = _masked_max(err, turn)
-            out["max_miss"][name] = _masked_max(miss_distances(sc.z, tr.predicted), checked)
         s = selections["fuzzy"]
         out["window"] = s.m
         out["sigma_hat"] = s.sigma_hat
         out["window_turn_median"] = _masked_median(s.m, on_arc)
-        out["window_turn_min"] = _masked_max(-s.m, on_arc) * -1.0
         out["window_straight_median"] = _masked_median(s.m, straight)
-        out["window_straight_is_max"] = jnp.sum(jnp.where(straight, s.m == cfg.max_window, False)) / jnp.sum(straight)
         out["sigma_settle_scan"] = settle_scan(s.sigma_hat, jnp.arange(s.sigma_hat.shape[0]) >= 2)
         out["sigma_final"] = s.sigma_hat[-1]
         return out
