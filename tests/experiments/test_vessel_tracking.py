@@ -45,6 +45,11 @@ def test_quick_study_reproduces_the_paper_within_30_percent(quick):
     # a peak over the turn cannot be below the straight legs' RMS (the turn adds a lag on top of noise)
     for speed in (10.0, 20.0):
         assert by[("error in the turn, peak (m)", speed)] > by[("error on straight legs, RMS (m)", speed)]
+    # the study note quotes this run's numbers, not typed-in ones
+    m = quick["metrics"]
+    note = next(n for n in quick["notes"] if n.startswith("where the reproduction differs"))
+    assert f"turn peaks {m['max_err_turn_10ms_m']:.0f} / {m['max_err_turn_20ms_m']:.0f} m" in note
+    assert f"σ̂ = {m['sigma_hat_final_m']:.1f} m" in note
 
 
 def test_quick_study_track_loss_metrics_and_intervals(quick):
