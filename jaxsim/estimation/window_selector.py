@@ -149,6 +149,10 @@ def window_selector(max_window: int = PAPER_MAX_WINDOW, slope: Any = PAPER_SLOPE
     big_j = check_max_window(max_window)
     if tnorm not in T_NORMS:
         raise ValueError(f"tnorm: must be one of {T_NORMS}, got {tnorm!r}")
+    for name, v in (("slope", slope), ("centre", centre)):
+        if np.shape(v) not in ((), (big_j - 1,)):
+            raise ValueError(f"{name}: expected a scalar or shape ({big_j - 1},) for max_window={big_j}, "
+                             f"got shape {np.shape(v)}")
     a = jnp.broadcast_to(jnp.asarray(slope, float), (big_j - 1,))
     c = jnp.broadcast_to(jnp.asarray(centre, float), (big_j - 1,))
     check_positive("slope", a)

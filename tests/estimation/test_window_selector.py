@@ -177,6 +177,10 @@ def test_other_bad_inputs_raise():
         window_selector(J, tnorm="lukasiewicz")
     with pytest.raises(ValueError, match="slope"):
         window_selector(J, slope=0.0)
+    with pytest.raises(ValueError, match="slope"):
+        window_selector(J, slope=np.ones(J))
+    with pytest.raises(ValueError, match="centre"):
+        window_selector(J, centre=np.ones((J - 1, 1)))
     with pytest.raises(ValueError, match="z"):
         window_bank_filter(np.zeros((5, 3)), J, DT)
     with pytest.raises(ValueError, match="window"):
