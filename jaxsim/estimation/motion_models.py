@@ -25,7 +25,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxsim.core.validation import check_positive
+from jaxsim.core.validation import check_covariance, check_positive
 from jaxsim.estimation.imm import IMM, ekf_member, imm, linear_member
 from jaxsim.estimation.nonlinear import nonlinear_ssm
 
@@ -71,9 +71,13 @@ def cv_ct_imm(dt: float, q_cv: float, q_ct: float, q_turn_rate: float, R: Any, s
     ``switch_prob``: scalar (both ways) or ``(p_cv→ct, p_ct→cv)`` per step.
     """
     check_positive("q_turn_rate", q_turn_rate, allow_zero=True)
-    p = np.broadcast_to(np.asarray(switch_prob, float), (2,))
+    p = np.asarray(switch_prob, float)
+    if p.shape not in ((), (2,)):
+        raise ValueError(f"switch_prob: expected a scalar or shape (2,), got shape {p.shape}")
+    p = np.broadcast_to(p, (2,))
     if np.any((p < 0) | (p > 1)):
         raise ValueError(f"switch_prob: must lie in [0, 1], got {switch_prob!r}")
+    check_covariance("R", R, 2)
     R = jnp.asarray(R, float)
     h5 = np.hstack([POSITION_2D, np.zeros((2, 1))])
     f_cv = np.zeros((5, 5))

@@ -18,13 +18,13 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
+from jaxsim.core.safe_norm import safe_norm
 from jaxsim.core.validation import check_positive
 
 
 def miss_distances(measurements: Any, predictions: Any) -> jax.Array:
     """``‖z_t − ẑ_{t|t−1}‖`` ``(T,)`` from plots ``(T, 2)`` and the predictions made for them ``(T, 2)``."""
-    d = jnp.asarray(measurements) - jnp.asarray(predictions)
-    return jnp.sqrt(jnp.sum(d * d, axis=-1))
+    return safe_norm(jnp.asarray(measurements) - jnp.asarray(predictions))
 
 
 def _mask(distances: jax.Array, mask: Any) -> jax.Array:
@@ -43,17 +43,19 @@ def track_lost(distances: Any, gate: Any, mask: Any = None) -> jax.Array:
 
 
 def first_miss(distances: Any, gate: Any, mask: Any = None) -> jax.Array:
-    """Index of the first checked scan outside the gate, ``-1`` if none (``distances (T,)``)."""
+    """Index of the first checked scan outside the gate, ``-1`` if none (``distances (T,)``); a ``gate``
+    of shape ``(G,)`` gives ``(G,)`` indices, as in :func:`track_lost`."""
     check_positive("gate", gate)
     d = jnp.asarray(distances)
-    out = (d > gate) & _mask(d, mask)
-    return jnp.where(jnp.any(out), jnp.argmax(out), -1)
+    out = (d > jnp.asarray(gate)[..., None]) & _mask(d, mask)
+    return jnp.where(jnp.any(out, axis=-1), jnp.argmax(out, axis=-1), -1)
 
 
 def soft_track_loss(distances: Any, gate: Any, temperature: Any, mask: Any = None) -> jax.Array:
-    """Smooth probability of loss ``1 − Π_t (1 − σ((d_t − gate)/T))`` over the checked scans."""
+    """Smooth probability of loss ``1 − Π_t (1 − σ((d_t − gate)/T))`` over the checked scans; a ``gate``
+    of shape ``(G,)`` gives ``(G,)`` probabilities, as in :func:`track_lost`."""
     check_positive("gate", gate)
     check_positive("temperature", temperature)
     d = jnp.asarray(distances)
-    log_keep = jax.nn.log_sigmoid(-(d - gate) / temperature)  # log(1 − σ(x)) = log σ(−x)
+    log_keep = jax.nn.log_sigmoid(-(d - jnp.asarray(gate)[..., None]) / temperature)  # log(1 − σ(x)) = log σ(−x)
     return -jnp.expm1(jnp.sum(jnp.where(_mask(d, mask), log_keep, 0.0), axis=-1))

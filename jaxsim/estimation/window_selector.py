@@ -40,8 +40,9 @@ import numpy as np
 from jaxsim.control.fuzzy import evaluate, rule_base, sugeno, terms
 from jaxsim.control.fuzzy.inference import FuzzySystem
 from jaxsim.core.pytree import pytree_dataclass, static_field
+from jaxsim.core.safe_norm import safe_norm
 from jaxsim.core.validation import check_finite, check_positive
-from jaxsim.estimation.alpha_beta import alpha_beta_update, growing_memory_gains
+from jaxsim.estimation.alpha_beta import window_bank
 
 PAPER_MAX_WINDOW = 10  # J, seed 003 section 4
 PAPER_SLOPE = 5.0  # a
@@ -81,8 +82,10 @@ class WindowBank(NamedTuple):
 def window_bank_filter(z: Any, max_window: int, dt: Any) -> WindowBank:
     """Run the bank on plots ``z (T, 2)`` (m) taken every ``dt`` (s).
 
-    Every window is the growing-memory α–β recursion restarted ``j`` plots back, evaluated for all
-    scans and windows at once (the recursion is unrolled over the ``J`` buffer slots).
+    Every window is the growing-memory α–β recursion restarted ``j`` plots back, i.e. the
+    least-squares line through those plots: :func:`~jaxsim.estimation.alpha_beta.window_bank` on the
+    last ``J`` plots of every scan (vmapped over scans).  A track younger than ``j`` scans uses all
+    ``t + 1`` plots so far (window ``min(j, t + 1)``); the first plot is its own estimate, velocity 0.
     """
     big_j = check_max_window(max_window)
     check_positive("dt", dt)
@@ -92,23 +95,17 @@ def window_bank_filter(z: Any, max_window: int, dt: Any) -> WindowBank:
     n_scans = z.shape[0]
     t = np.arange(n_scans)[:, None]
     idx = t - big_j + 1 + np.arange(big_j)[None, :]  # (T, J): buffer slots, oldest first
-    slots = z[np.maximum(idx, 0)]  # (T, J, 2)
-    windows = np.arange(2, big_j + 1)
-    first = big_j - np.minimum(windows[None, :], t + 1)  # (T, J − 1): first slot of each window
-    pos = jnp.zeros((n_scans, big_j - 1, 2))
-    vel = jnp.zeros_like(pos)
-    for s in range(big_j):
-        k = s - first + 1  # plots processed by window j once slot s is in (static NumPy)
-        z_s = jnp.broadcast_to(slots[:, s, None, :], pos.shape)
-        alpha, beta = growing_memory_gains(np.maximum(k, 2))
-        x_new, v_new, _, _ = alpha_beta_update(pos, vel, z_s, alpha[..., None], beta[..., None], dt)
-        start, update = (k == 1)[..., None], (k >= 2)[..., None]
-        pos = jnp.where(start, z_s, jnp.where(update, x_new, pos))
-        vel = jnp.where(start, 0.0, jnp.where(update, v_new, vel))
+    fits = jax.vmap(lambda last: window_bank(last, dt))(z[np.maximum(idx, 0)])  # (T, J − 1, 2, 2)
+    # window min(j, t + 1) never reaches the padded slots (index < 0) of a young track
+    used = np.maximum(np.minimum(np.arange(2, big_j + 1)[None, :], t + 1), 2) - 2  # (T, J − 1)
+    fits = fits[t, used]
+    first = (t == 0)[..., None]
+    pos = jnp.where(first, z[:, None, :], fits[:, :, 0])
+    vel = jnp.where(first, 0.0, fits[:, :, 1])
     pred = pos + vel * dt
     prev = jnp.concatenate([pred[:1], pred[:-1]], axis=0)
     valid = jnp.asarray(np.arange(n_scans) >= 2)
-    resid = jnp.sqrt(jnp.sum((z[:, None, :] - prev) ** 2, axis=-1))
+    resid = safe_norm(z[:, None, :] - prev)
     return WindowBank(pos, vel, pred, jnp.where(valid[:, None], resid, 0.0), valid)
 
 
@@ -148,6 +145,10 @@ def window_selector(max_window: int = PAPER_MAX_WINDOW, slope: Any = PAPER_SLOPE
     big_j = check_max_window(max_window)
     if tnorm not in T_NORMS:
         raise ValueError(f"tnorm: must be one of {T_NORMS}, got {tnorm!r}")
+    for name, v in (("slope", slope), ("centre", centre)):
+        if np.shape(v) not in ((), (big_j - 1,)):
+            raise ValueError(f"{name}: expected a scalar or shape ({big_j - 1},) for max_window={big_j}, "
+                             f"got shape {np.shape(v)}")
     a = jnp.broadcast_to(jnp.asarray(slope, float), (big_j - 1,))
     c = jnp.broadcast_to(jnp.asarray(centre, float), (big_j - 1,))
     check_positive("slope", a)

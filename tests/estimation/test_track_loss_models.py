@@ -22,6 +22,17 @@ def test_track_lost_first_miss_and_gate_vector():
     assert int(first_miss(d, 10.0)) == 1 and int(first_miss(d, 60.0)) == -1
 
 
+def test_first_miss_and_soft_loss_take_a_gate_vector_like_track_lost():
+    d = jnp.array([10.0, 35.0, 20.0, 45.0])
+    gates = np.array([5.0, 30.0, 40.0, 60.0])
+    np.testing.assert_array_equal(first_miss(d, gates), [0, 1, 3, -1])
+    for g, i in zip(gates, [0, 1, 3, -1]):
+        assert int(first_miss(d, g)) == i
+    soft = soft_track_loss(d, gates, 2.0)
+    np.testing.assert_allclose(soft, [float(soft_track_loss(d, g, 2.0)) for g in gates], rtol=1e-12)
+    np.testing.assert_allclose(soft_track_loss(d, gates, 1e-3), np.asarray(track_lost(d, gates), float), atol=1e-12)
+
+
 def test_soft_track_loss_tends_to_the_event_and_is_a_probability():
     d = jnp.array([10.0, 35.0, 20.0])
     for gate, lost in ((30.0, 1.0), (40.0, 0.0)):
@@ -29,6 +40,16 @@ def test_soft_track_loss_tends_to_the_event_and_is_a_probability():
     # independent per-scan "probabilities" σ((d − g)/T): 1 − Π(1 − p_t)
     p = 1.0 / (1.0 + np.exp(-(np.asarray(d) - 30.0) / 5.0))
     np.testing.assert_allclose(soft_track_loss(d, 30.0, 5.0), 1.0 - np.prod(1.0 - p), rtol=1e-12)
+
+
+def test_miss_distance_gradient_is_finite_at_zero_and_the_unit_vector_elsewhere():
+    z = jnp.array([[1.0, 2.0], [3.0, 4.0]])
+    pred = jnp.array([[1.0, 2.0], [0.0, 0.0]])  # scan 0: the plot is its own prediction (d = 0)
+    g = jax.grad(lambda z: jnp.sum(miss_distances(z, pred)))(z)
+    np.testing.assert_array_equal(g[0], [0.0, 0.0])
+    np.testing.assert_allclose(g[1], [0.6, 0.8], rtol=1e-12)
+    g_soft = jax.grad(lambda z: soft_track_loss(miss_distances(z, pred), 4.0, 1.0))(z)
+    assert np.all(np.isfinite(g_soft))
 
 
 @pytest.mark.parametrize("gate", [0.0, -10.0])
@@ -67,6 +88,14 @@ def test_coordinated_turn_step_follows_the_vessel_arc_and_reduces_to_cv():
 def test_cv_ct_imm_checks_switch_probability():
     with pytest.raises(ValueError, match="switch_prob"):
         cv_ct_imm(3.0, 0.01, 0.05, 1e-4, np.eye(2), switch_prob=1.5)
+    with pytest.raises(ValueError, match="switch_prob"):
+        cv_ct_imm(3.0, 0.01, 0.05, 1e-4, np.eye(2), switch_prob=[0.1, 0.1, 0.1])
+
+
+@pytest.mark.parametrize("R", [np.eye(3), np.ones(2), np.array([[1.0, 0.0], [0.0, -1.0]])])
+def test_cv_ct_imm_checks_plot_covariance(R):
+    with pytest.raises(ValueError, match="R"):
+        cv_ct_imm(3.0, 0.01, 0.05, 1e-4, R)
 
 
 def test_imm_can_be_built_inside_jit_and_still_checks_concrete_transitions():

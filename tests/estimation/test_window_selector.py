@@ -150,6 +150,14 @@ def test_selector_gradient_matches_finite_differences():
     assert np.any(np.abs(np.asarray(g)) > 1e-3)
 
 
+def test_bank_residual_gradient_is_finite_where_the_residual_is_zero():
+    z = jnp.zeros((6, 2))  # a still target at the origin without noise: every residual is exactly 0
+    bank = window_bank_filter(z, 4, DT)
+    assert np.all(np.asarray(bank.residuals) == 0.0)
+    g = jax.grad(lambda z: jnp.sum(window_bank_filter(z, 4, DT).residuals))(z)
+    assert np.all(np.isfinite(np.asarray(g)))
+
+
 @pytest.mark.parametrize("bad", [1, 0, -3, 2.5, True])
 def test_empty_or_invalid_window_range_raises(bad):
     with pytest.raises(ValueError, match="max_window"):
@@ -169,6 +177,10 @@ def test_other_bad_inputs_raise():
         window_selector(J, tnorm="lukasiewicz")
     with pytest.raises(ValueError, match="slope"):
         window_selector(J, slope=0.0)
+    with pytest.raises(ValueError, match="slope"):
+        window_selector(J, slope=np.ones(J))
+    with pytest.raises(ValueError, match="centre"):
+        window_selector(J, centre=np.ones((J - 1, 1)))
     with pytest.raises(ValueError, match="z"):
         window_bank_filter(np.zeros((5, 3)), J, DT)
     with pytest.raises(ValueError, match="window"):

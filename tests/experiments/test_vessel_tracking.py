@@ -42,8 +42,14 @@ def test_quick_study_reproduces_the_paper_within_30_percent(quick):
     assert by[("error on straight legs, peak (m)", 20.0)] < 1.5 * 12.0
     # the manoeuvre shrinks the window more at 20 m/s, as in the paper (5–6 vs 3–4)
     assert by[("window in the turn (median)", 20.0)] < by[("window in the turn (median)", 10.0)] - 1.5
+    # a peak over the turn cannot be below the straight legs' RMS (the turn adds a lag on top of noise)
+    for speed in (10.0, 20.0):
+        assert by[("error in the turn, peak (m)", speed)] > by[("error on straight legs, RMS (m)", speed)]
+    # the study note quotes this run's numbers, not typed-in ones
     m = quick["metrics"]
-    assert m["max_err_turn_10ms_m"] == by[("error in the turn, peak (m)", 10.0)]
+    note = next(n for n in quick["notes"] if n.startswith("where the reproduction differs"))
+    assert f"turn peaks {m['max_err_turn_10ms_m']:.0f} / {m['max_err_turn_20ms_m']:.0f} m" in note
+    assert f"σ̂ = {m['sigma_hat_final_m']:.1f} m" in note
 
 
 def test_quick_study_track_loss_metrics_and_intervals(quick):
