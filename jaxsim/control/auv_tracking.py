@@ -102,11 +102,14 @@ def tracking_errors(eta: jax.Array, target: jax.Array) -> jax.Array:
 
 
 def reference_velocity(lam: jax.Array, eta: jax.Array, target: jax.Array) -> jax.Array:
-    """``ν_r = J⁻¹([V; w·Θ̇*] + Λ E)`` for ``target = [X, V, A]`` ``(3, 3)``; ``(6,)``."""
+    """``ν_r = V* + Λ J⁻¹ E`` (paper eq. 20) with ``V* = J⁻¹[V; w·Θ̇*]``, for ``target = [X, V, A]``
+    ``(3, 3)``; ``(6,)``.  ``Λ`` acts on the body-frame error ``J⁻¹E``, not on ``E``: the two differ
+    in attitude once roll/pitch ≠ 0 (``T(Θ)⁻¹`` does not commute with ``diag(0.2, 0.4, 0.4)``)."""
     _, v, a = target
     _, att_rate = attitude_reference(v, a)
     j_inv = marine.kinematics_jacobian_inverse(eta)
-    return j_inv @ (jnp.concatenate([v, course_gate(v) * att_rate]) + lam * tracking_errors(eta, target))
+    v_star = j_inv @ jnp.concatenate([v, course_gate(v) * att_rate])
+    return v_star + lam * (j_inv @ tracking_errors(eta, target))
 
 
 def control_force(params: TrackingParams, x: jax.Array, target: jax.Array) -> jax.Array:
