@@ -38,7 +38,7 @@ import jax.numpy as jnp
 from jaxsim.core.pytree import pytree_dataclass, static_field
 from jaxsim.core.switching import get_switch
 from jaxsim.core.system import Controller
-from jaxsim.core.validation import check_positive, check_shape
+from jaxsim.core.validation import check_finite, check_positive, check_shape
 from jaxsim.plants import auv, marine
 
 PAPER_LAMBDA = (0.2, 0.2, 0.2, 0.2, 0.4, 0.4)  # paper line 1004
@@ -145,7 +145,8 @@ def auv_tracking(
     """The controller as a :class:`~jaxsim.core.system.Controller` (paper gains by default).
 
     ``model`` is what the controller believes (default: the nominal AUV).  ``ValueError`` for
-    non-positive gains, a wrong shape, an unknown switch or a non-positive width.
+    non-positive gains, a wrong shape, an unknown switch, a non-positive width or a non-finite
+    ``t_start``.
     """
     m = auv.nominal_params() if model is None else model
     auv.validate(m)
@@ -154,6 +155,7 @@ def auv_tracking(
         check_shape(name, value, (6,))
         check_positive(name, value)
     check_positive("width", width)
+    check_finite("t_start", t_start)
     params = TrackingParams(jnp.asarray(lam, dtype=float), jnp.asarray(k_s, dtype=float),
                             jnp.asarray(width, dtype=float), m, jnp.asarray(t_start, dtype=float), switch)
     return Controller(params, _init, _step, name=f"auv_tracking_{switch}")

@@ -51,7 +51,7 @@ import jax.numpy as jnp
 
 from jaxsim.core.pytree import pytree_dataclass, static_field
 from jaxsim.core.system import Estimator
-from jaxsim.core.validation import check_positive
+from jaxsim.core.validation import check_finite, check_positive, check_shape
 from jaxsim.estimation import kalman
 from jaxsim.estimation.alpha_beta import poly_window_weights
 from jaxsim.estimation.types import GaussianState
@@ -177,7 +177,8 @@ def leader_predictor(
 
     ``window = M + 1`` samples (the paper's ``M = 50`` → 51), ``degree = N`` (4), spaced
     ``camera_period`` (0.1 s).  ``ValueError`` for an unknown ``mode``, ``window < degree + 1``,
-    ``degree < 2`` (the filter needs an acceleration) or non-positive noise levels.
+    ``degree < 2`` (the filter needs an acceleration), non-positive noise levels or ``camera_period``,
+    ``p0`` not of shape ``(2,)`` or a non-finite ``t_start``.
     """
     if mode not in MODES:
         raise ValueError(f"mode: expected one of {MODES}, got {mode!r}")
@@ -185,7 +186,10 @@ def leader_predictor(
         raise ValueError(f"degree: must be at least 2 (the filter is driven by the fitted acceleration), got {degree}")
     check_positive("accel_psd", accel_psd)
     check_positive("meas_std", meas_std)
+    check_shape("p0", p0, (2,))
     check_positive("p0", p0)
+    check_positive("camera_period", camera_period)
+    check_finite("t_start", t_start)
     weights = poly_window_weights(int(window), int(degree), camera_period)
     params = PredictorParams(weights, jnp.asarray(accel_psd, dtype=float), jnp.asarray(meas_std, dtype=float),
                              jnp.asarray(p0, dtype=float), jnp.asarray(t_start, dtype=float), mode)

@@ -77,6 +77,8 @@ def test_bad_input():
         auv_tracking(lam=(0.2, 0.2))
     with pytest.raises(ValueError, match="k_s"):
         auv_tracking(k_s=-jnp.ones(6))
+    with pytest.raises(ValueError, match="t_start"):
+        auv_tracking(t_start=float("inf"))
     with pytest.raises(ValueError, match="camera_period"):
         formation.camera_sensor(camera_period=0.1005, control_period=1e-3)
     with pytest.raises(ValueError, match="pos_std"):
