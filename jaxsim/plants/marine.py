@@ -23,9 +23,8 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
-from jaxsim.core.validation import check_finite, is_concrete
+from jaxsim.core.validation import check_covariance
 
 
 def skew(v: jax.Array) -> jax.Array:
@@ -165,18 +164,7 @@ def check_mass_matrix(name: str, mass: Any, *, rtol: float = 1e-10) -> None:
 
     Only the shape is checked on tracers (values are unknown under jit/vmap).
     """
-    if tuple(np.shape(mass)) != (6, 6):
-        raise ValueError(f"{name}: expected a (6, 6) mass matrix, got shape {tuple(np.shape(mass))}")
-    check_finite(name, mass)
-    if not is_concrete(mass):
-        return
-    m = np.asarray(mass, dtype=float)
-    scale = max(float(np.max(np.abs(m))), np.finfo(float).tiny)
-    if float(np.max(np.abs(m - m.T))) > rtol * scale:
-        raise ValueError(f"{name}: mass matrix must be symmetric (max |M − Mᵀ| = {np.max(np.abs(m - m.T)):.3g})")
-    eig = np.linalg.eigvalsh(m)
-    if float(eig[0]) <= rtol * float(eig[-1]) or float(eig[0]) <= 0.0:
-        raise ValueError(f"{name}: mass matrix must be positive definite (smallest eigenvalue {eig[0]:.6g})")
+    check_covariance(name, mass, 6, rtol=rtol, definite=True)
 
 
 def unbalanced_forces(

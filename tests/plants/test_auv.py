@@ -116,6 +116,9 @@ def test_kinematics_jacobian():
 def test_bad_input():
     with pytest.raises(ValueError, match="positive definite"):
         auv.auv_plant(auv.AUVParams(M_A=-200.0 * jnp.eye(6)))
+    singular = np.diag([185.0, 255, 255, 15.2, 33, 0.0])  # PSD, not PD: M_A = 0 leaves it singular
+    with pytest.raises(ValueError, match="M .*positive definite"):
+        auv.auv_plant(auv.AUVParams(M_R=singular, M_A=jnp.zeros((6, 6))))
     bad = np.diag([185.0, 255, 255, 15.2, 33, 33])
     bad[0, 1] = 5.0
     with pytest.raises(ValueError, match="symmetric"):
