@@ -61,19 +61,6 @@ class TrackingParams:
 COURSE_SPEED_BAND = (0.2, 0.5)  # m/s: below/above it the course reference is off/on (assumed)
 
 
-def _safe_heading_pitch(v: jax.Array) -> jax.Array:
-    """``[0, θ, ψ]`` along ``v``; ``[0, 0, 0]`` (with zero derivatives) where the horizontal speed is
-    below half the course band's lower edge, where :func:`course_gate` is 0 anyway."""
-    h2 = v[0] ** 2 + v[1] ** 2
-    ok = h2 > (0.5 * COURSE_SPEED_BAND[0]) ** 2
-    vx = jnp.where(ok, v[0], 1.0)
-    vy = jnp.where(ok, v[1], 0.0)
-    vh = jnp.sqrt(jnp.where(ok, h2, 1.0))
-    psi = jnp.where(ok, jnp.arctan2(vy, vx), 0.0)
-    theta = jnp.where(ok, jnp.arctan2(jnp.where(ok, -v[2], 0.0), vh), 0.0)
-    return jnp.stack([jnp.zeros_like(psi), theta, psi])
-
-
 def course_gate(velocity: jax.Array) -> jax.Array:
     """Weight in ``[0, 1]`` of the course (attitude) reference: a C¹ smoothstep of the horizontal
     speed over :data:`COURSE_SPEED_BAND`.  The direction of a slow target point is ill-defined (its
@@ -92,7 +79,8 @@ def wrap_angle(a: jax.Array) -> jax.Array:
 
 def attitude_reference(velocity: jax.Array, acceleration: jax.Array) -> tuple[jax.Array, jax.Array]:
     """``Θ*`` and ``Θ̇*`` ``(3,)`` each: roll 0, pitch and yaw along ``velocity``."""
-    return jax.jvp(_safe_heading_pitch, (velocity,), (acceleration,))
+    # below half the course band's lower edge course_gate is 0 anyway
+    return jax.jvp(lambda v: marine.course_attitude(v, 0.5 * COURSE_SPEED_BAND[0]), (velocity,), (acceleration,))
 
 
 def tracking_errors(eta: jax.Array, target: jax.Array) -> jax.Array:

@@ -68,6 +68,18 @@ def euler_from_rotation(rot: jax.Array) -> jax.Array:
     return jnp.stack([phi, theta, psi])
 
 
+def course_attitude(velocity: jax.Array, min_speed: Any = 0.0) -> jax.Array:
+    """``[0, θ, ψ]`` (rad) of a body with no roll whose x axis points along ``velocity (3,)`` (m/s,
+    NED: pitch up > 0).  Where the horizontal speed is at most ``min_speed`` (m/s) the direction is
+    ill-defined: ``[0, 0, 0]`` with zero derivatives (finite under ``jvp``/``grad``)."""
+    h2 = velocity[0] ** 2 + velocity[1] ** 2
+    ok = h2 > jnp.asarray(min_speed) ** 2
+    vh = jnp.sqrt(jnp.where(ok, h2, 1.0))
+    psi = jnp.where(ok, jnp.arctan2(jnp.where(ok, velocity[1], 0.0), jnp.where(ok, velocity[0], 1.0)), 0.0)
+    theta = jnp.where(ok, jnp.arctan2(jnp.where(ok, -velocity[2], 0.0), vh), 0.0)
+    return jnp.stack([jnp.zeros_like(psi), theta, psi])
+
+
 def euler_rate_matrix(euler: jax.Array) -> jax.Array:
     """``T(Θ)`` with ``Θ̇ = T ω`` (body angular velocity ``ω``); singular at ``θ = ±90°``."""
     sphi, cphi = jnp.sin(euler[0]), jnp.cos(euler[0])
