@@ -83,21 +83,22 @@ def attitude_reference(velocity: jax.Array, acceleration: jax.Array) -> tuple[ja
     return jax.jvp(lambda v: marine.course_attitude(v, 0.5 * COURSE_SPEED_BAND[0]), (velocity,), (acceleration,))
 
 
-def tracking_errors(eta: jax.Array, target: jax.Array) -> jax.Array:
-    """``E = [X − p; w·wrap(Θ* − Θ)]`` ``(6,)`` with ``w`` the :func:`course_gate`."""
-    att, _ = attitude_reference(target[1], target[2])
-    return jnp.concatenate([target[0] - eta[:3], course_gate(target[1]) * wrap_angle(att - eta[3:6])])
+def tracking_errors(eta: jax.Array, position: jax.Array, gate: jax.Array, att: jax.Array) -> jax.Array:
+    """``E = [X − p; w·wrap(Θ* − Θ)]`` ``(6,)`` for target ``position (3,)``, course gate ``w`` and
+    ``Θ* (3,)`` (from :func:`course_gate` and :func:`attitude_reference`)."""
+    return jnp.concatenate([position - eta[:3], gate * wrap_angle(att - eta[3:6])])
 
 
 def reference_velocity(lam: jax.Array, eta: jax.Array, target: jax.Array) -> jax.Array:
     """``ν_r = V* + Λ J⁻¹ E`` (paper eq. 20) with ``V* = J⁻¹[V; w·Θ̇*]``, for ``target = [X, V, A]``
     ``(3, 3)``; ``(6,)``.  ``Λ`` acts on the body-frame error ``J⁻¹E``, not on ``E``: the two differ
     in attitude once roll/pitch ≠ 0 (``T(Θ)⁻¹`` does not commute with ``diag(0.2, 0.4, 0.4)``)."""
-    _, v, a = target
-    _, att_rate = attitude_reference(v, a)
+    x, v, a = target
+    gate = course_gate(v)
+    att, att_rate = attitude_reference(v, a)  # once per tick, shared by V* and E
     j_inv = marine.kinematics_jacobian_inverse(eta)
-    v_star = j_inv @ jnp.concatenate([v, course_gate(v) * att_rate])
-    return v_star + lam * (j_inv @ tracking_errors(eta, target))
+    v_star = j_inv @ jnp.concatenate([v, gate * att_rate])
+    return v_star + lam * (j_inv @ tracking_errors(eta, x, gate, att))
 
 
 def control_force(params: TrackingParams, x: jax.Array, target: jax.Array) -> jax.Array:
