@@ -38,7 +38,7 @@ import jax.numpy as jnp
 from jaxsim.core.pytree import pytree_dataclass, static_field
 from jaxsim.core.switching import get_switch
 from jaxsim.core.system import Controller
-from jaxsim.core.validation import check_positive, check_shape
+from jaxsim.core.validation import check_finite, check_positive, check_shape
 from jaxsim.plants import auv, marine
 
 PAPER_LAMBDA = (0.2, 0.2, 0.2, 0.2, 0.4, 0.4)  # paper line 1004
@@ -61,19 +61,6 @@ class TrackingParams:
 COURSE_SPEED_BAND = (0.2, 0.5)  # m/s: below/above it the course reference is off/on (assumed)
 
 
-def _safe_heading_pitch(v: jax.Array) -> jax.Array:
-    """``[0, θ, ψ]`` along ``v``; ``[0, 0, 0]`` (with zero derivatives) where the horizontal speed is
-    below half the course band's lower edge, where :func:`course_gate` is 0 anyway."""
-    h2 = v[0] ** 2 + v[1] ** 2
-    ok = h2 > (0.5 * COURSE_SPEED_BAND[0]) ** 2
-    vx = jnp.where(ok, v[0], 1.0)
-    vy = jnp.where(ok, v[1], 0.0)
-    vh = jnp.sqrt(jnp.where(ok, h2, 1.0))
-    psi = jnp.where(ok, jnp.arctan2(vy, vx), 0.0)
-    theta = jnp.where(ok, jnp.arctan2(jnp.where(ok, -v[2], 0.0), vh), 0.0)
-    return jnp.stack([jnp.zeros_like(psi), theta, psi])
-
-
 def course_gate(velocity: jax.Array) -> jax.Array:
     """Weight in ``[0, 1]`` of the course (attitude) reference: a C¹ smoothstep of the horizontal
     speed over :data:`COURSE_SPEED_BAND`.  The direction of a slow target point is ill-defined (its
@@ -92,21 +79,26 @@ def wrap_angle(a: jax.Array) -> jax.Array:
 
 def attitude_reference(velocity: jax.Array, acceleration: jax.Array) -> tuple[jax.Array, jax.Array]:
     """``Θ*`` and ``Θ̇*`` ``(3,)`` each: roll 0, pitch and yaw along ``velocity``."""
-    return jax.jvp(_safe_heading_pitch, (velocity,), (acceleration,))
+    # below half the course band's lower edge course_gate is 0 anyway
+    return jax.jvp(lambda v: marine.course_attitude(v, 0.5 * COURSE_SPEED_BAND[0]), (velocity,), (acceleration,))
 
 
-def tracking_errors(eta: jax.Array, target: jax.Array) -> jax.Array:
-    """``E = [X − p; w·wrap(Θ* − Θ)]`` ``(6,)`` with ``w`` the :func:`course_gate`."""
-    att, _ = attitude_reference(target[1], target[2])
-    return jnp.concatenate([target[0] - eta[:3], course_gate(target[1]) * wrap_angle(att - eta[3:6])])
+def tracking_errors(eta: jax.Array, position: jax.Array, gate: jax.Array, att: jax.Array) -> jax.Array:
+    """``E = [X − p; w·wrap(Θ* − Θ)]`` ``(6,)`` for target ``position (3,)``, course gate ``w`` and
+    ``Θ* (3,)`` (from :func:`course_gate` and :func:`attitude_reference`)."""
+    return jnp.concatenate([position - eta[:3], gate * wrap_angle(att - eta[3:6])])
 
 
 def reference_velocity(lam: jax.Array, eta: jax.Array, target: jax.Array) -> jax.Array:
-    """``ν_r = J⁻¹([V; w·Θ̇*] + Λ E)`` for ``target = [X, V, A]`` ``(3, 3)``; ``(6,)``."""
-    _, v, a = target
-    _, att_rate = attitude_reference(v, a)
+    """``ν_r = V* + Λ J⁻¹ E`` (paper eq. 20) with ``V* = J⁻¹[V; w·Θ̇*]``, for ``target = [X, V, A]``
+    ``(3, 3)``; ``(6,)``.  ``Λ`` acts on the body-frame error ``J⁻¹E``, not on ``E``: the two differ
+    in attitude once roll/pitch ≠ 0 (``T(Θ)⁻¹`` does not commute with ``diag(0.2, 0.4, 0.4)``)."""
+    x, v, a = target
+    gate = course_gate(v)
+    att, att_rate = attitude_reference(v, a)  # once per tick, shared by V* and E
     j_inv = marine.kinematics_jacobian_inverse(eta)
-    return j_inv @ (jnp.concatenate([v, course_gate(v) * att_rate]) + lam * tracking_errors(eta, target))
+    v_star = j_inv @ jnp.concatenate([v, gate * att_rate])
+    return v_star + lam * (j_inv @ tracking_errors(eta, x, gate, att))
 
 
 def control_force(params: TrackingParams, x: jax.Array, target: jax.Array) -> jax.Array:
@@ -142,7 +134,8 @@ def auv_tracking(
     """The controller as a :class:`~jaxsim.core.system.Controller` (paper gains by default).
 
     ``model`` is what the controller believes (default: the nominal AUV).  ``ValueError`` for
-    non-positive gains, a wrong shape, an unknown switch or a non-positive width.
+    non-positive gains, a wrong shape, an unknown switch, a non-positive width or a non-finite
+    ``t_start``.
     """
     m = auv.nominal_params() if model is None else model
     auv.validate(m)
@@ -151,6 +144,7 @@ def auv_tracking(
         check_shape(name, value, (6,))
         check_positive(name, value)
     check_positive("width", width)
+    check_finite("t_start", t_start)
     params = TrackingParams(jnp.asarray(lam, dtype=float), jnp.asarray(k_s, dtype=float),
                             jnp.asarray(width, dtype=float), m, jnp.asarray(t_start, dtype=float), switch)
     return Controller(params, _init, _step, name=f"auv_tracking_{switch}")

@@ -72,8 +72,9 @@ def check_square(name: str, m: Any) -> None:
         raise ValueError(f"{name}: expected a square matrix, got shape {tuple(shape)}")
 
 
-def check_covariance(name: str, m: Any, n: int | None = None, *, rtol: float = 1e-8) -> None:
-    """Require a symmetric positive semi-definite ``(n, n)`` matrix (or a stack ``(..., n, n)``).
+def check_covariance(name: str, m: Any, n: int | None = None, *, rtol: float = 1e-8, definite: bool = False) -> None:
+    """Require a symmetric positive semi-definite ``(n, n)`` matrix (or a stack ``(..., n, n)``);
+    with ``definite``, positive definite (smallest eigenvalue > ``rtol·max|λ|``).
 
     Shape is always checked; symmetry (to ``rtol`` of the largest entry) and the sign of the
     smallest eigenvalue (≥ ``−rtol·max|λ|``) only when ``m`` is concrete.
@@ -91,5 +92,8 @@ def check_covariance(name: str, m: Any, n: int | None = None, *, rtol: float = 1
     if asym > rtol * scale:
         raise ValueError(f"{name}: must be symmetric (max |M − Mᵀ| = {asym:.3g})")
     eig = np.linalg.eigvalsh(arr)
-    if float(np.min(eig)) < -rtol * max(float(np.max(np.abs(eig))), np.finfo(float).tiny):
-        raise ValueError(f"{name}: must be positive semi-definite (smallest eigenvalue {float(np.min(eig)):.3g})")
+    lo, tol = float(np.min(eig)), rtol * max(float(np.max(np.abs(eig))), np.finfo(float).tiny)
+    if definite and lo <= tol:
+        raise ValueError(f"{name}: must be positive definite (smallest eigenvalue {lo:.6g})")
+    if lo < -tol:
+        raise ValueError(f"{name}: must be positive semi-definite (smallest eigenvalue {lo:.3g})")

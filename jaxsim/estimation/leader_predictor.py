@@ -51,7 +51,7 @@ import jax.numpy as jnp
 
 from jaxsim.core.pytree import pytree_dataclass, static_field
 from jaxsim.core.system import Estimator
-from jaxsim.core.validation import check_positive
+from jaxsim.core.validation import check_finite, check_positive, check_shape
 from jaxsim.estimation import kalman
 from jaxsim.estimation.alpha_beta import poly_window_weights
 from jaxsim.estimation.types import GaussianState
@@ -65,13 +65,15 @@ READ_SIZE = 22
 class PredictorParams:
     """Tunable numbers (leaves) and the sizes/mode (static).
 
-    weights ``(degree + 1, window)``: FIR weights of the fit; accel_psd ``q`` (m²/s³); meas_std (m);
-    p0 ``(2,)`` initial variances of ``[v, X]`` per axis; t_start (s): frames before it are ignored.
+    weights ``(3, window)``: FIR weights of the fit's position, velocity and acceleration rows;
+    accel_psd ``q`` (m²/s³); meas_cov ``(2, 2)``: the filter's ``R`` (:func:`fit_covariance`, built
+    once by :func:`leader_predictor` from ``meas_std``); p0 ``(2,)`` initial variances of ``[v, X]``
+    per axis; t_start (s): frames before it are ignored.
     """
 
     weights: jax.Array
+    meas_cov: jax.Array
     accel_psd: Any = 1e-3
-    meas_std: Any = 0.01
     p0: Any = (1.0, 1.0)
     t_start: Any = 0.0
     mode: str = static_field(default="kalman")
@@ -104,11 +106,12 @@ def double_integrator(h: Any, accel_psd: Any) -> tuple[jax.Array, jax.Array, jax
 def fit_covariance(weights: jax.Array, meas_std: Any) -> jax.Array:
     """Covariance ``(2, 2)`` of the fit's ``[v̂, X̂]`` for white sample noise ``meas_std``."""
     w = weights[jnp.array([1, 0])]
-    return meas_std**2 * (w @ w.T) + 1e-12 * jnp.eye(2)
+    return meas_std**2 * (w @ w.T)  # Gram of two independent weight rows: positive definite
 
 
 def fit_window(weights: jax.Array, window: jax.Array) -> jax.Array:
-    """Rows position, velocity, acceleration ``(3, 3)`` at the newest sample of ``window (W, 3)``."""
+    """Rows position, velocity, acceleration ``(3, 3)`` at the newest sample of ``window (W, 3)``
+    for FIR ``weights (≥ 3, W)``."""
     return (weights @ window)[:3]
 
 
@@ -123,21 +126,23 @@ def _init(params: PredictorParams, y0: jax.Array) -> PredictorState:
                           GaussianState(mean, cov), jnp.zeros((), dtype=jnp.int32))
 
 
+def _on_frame(params: PredictorParams, s: PredictorState, z_fr: jax.Array) -> PredictorState:
+    """Shift the camera sample into the window, refit, and correct the filter with the fit."""
+    sample = s.ins[:3] + rotation_z(s.ins[5]) @ z_fr
+    window = jnp.concatenate([s.window[1:], sample[None]])
+    fit = fit_window(params.weights, window)
+    z = jnp.stack([fit[1], fit[0]], axis=1)  # (3, 2): [v̂, X̂] per axis
+    kf = jax.vmap(lambda m, c, zz: kalman.update(GaussianState(m, c), zz, jnp.eye(2), params.meas_cov)[0])(
+        s.kf.mean, s.kf.cov, z)
+    return s._replace(window=window, fit=fit, t_frame=s.t, kf=kf, frames=s.frames + 1)
+
+
 def _update(params: PredictorParams, s: PredictorState, y: jax.Array) -> PredictorState:
     ins, z_fr = y[:12], y[12:15]
     frame = (y[15] > 0.5) & (s.t >= params.t_start - 1e-9)
-    sample = ins[:3] + rotation_z(ins[5]) @ z_fr
-    window = jnp.concatenate([s.window[1:], sample[None]])
-    fit = fit_window(params.weights, window)
-    R = fit_covariance(params.weights, params.meas_std)
-    z = jnp.stack([fit[1], fit[0]], axis=1)  # (3, 2): [v̂, X̂] per axis
-    corrected = jax.vmap(lambda m, c, zz: kalman.update(GaussianState(m, c), zz, jnp.eye(2), R)[0])(
-        s.kf.mean, s.kf.cov, z)
-    pick = lambda new, old: jnp.where(frame, new, old)  # noqa: E731
-    return PredictorState(
-        s.t, ins, pick(window, s.window), pick(fit, s.fit), pick(s.t, s.t_frame),
-        jax.tree_util.tree_map(pick, corrected, s.kf), s.frames + frame.astype(s.frames.dtype),
-    )
+    s = s._replace(ins=ins)
+    # only 1 tick in camera_period / h carries a frame: skip the refit otherwise (a select under vmap)
+    return jax.lax.cond(frame, lambda st: _on_frame(params, st, z_fr), lambda st: st, s)
 
 
 def _predict(params: PredictorParams, s: PredictorState, u: jax.Array, dt: Any) -> PredictorState:
@@ -177,7 +182,8 @@ def leader_predictor(
 
     ``window = M + 1`` samples (the paper's ``M = 50`` → 51), ``degree = N`` (4), spaced
     ``camera_period`` (0.1 s).  ``ValueError`` for an unknown ``mode``, ``window < degree + 1``,
-    ``degree < 2`` (the filter needs an acceleration) or non-positive noise levels.
+    ``degree < 2`` (the filter needs an acceleration), non-positive noise levels or ``camera_period``,
+    ``p0`` not of shape ``(2,)`` or a non-finite ``t_start``.
     """
     if mode not in MODES:
         raise ValueError(f"mode: expected one of {MODES}, got {mode!r}")
@@ -185,8 +191,12 @@ def leader_predictor(
         raise ValueError(f"degree: must be at least 2 (the filter is driven by the fitted acceleration), got {degree}")
     check_positive("accel_psd", accel_psd)
     check_positive("meas_std", meas_std)
+    check_shape("p0", p0, (2,))
     check_positive("p0", p0)
-    weights = poly_window_weights(int(window), int(degree), camera_period)
-    params = PredictorParams(weights, jnp.asarray(accel_psd, dtype=float), jnp.asarray(meas_std, dtype=float),
+    check_positive("camera_period", camera_period)
+    check_finite("t_start", t_start)
+    weights = poly_window_weights(int(window), int(degree), camera_period)[:3]
+    meas_cov = fit_covariance(weights, jnp.asarray(meas_std, dtype=float))  # differentiable in meas_std
+    params = PredictorParams(weights, meas_cov, jnp.asarray(accel_psd, dtype=float),
                              jnp.asarray(p0, dtype=float), jnp.asarray(t_start, dtype=float), mode)
     return Estimator(params, _init, _predict, _update, _read, name=f"leader_predictor_{mode}")

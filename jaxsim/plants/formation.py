@@ -42,7 +42,7 @@ import numpy as np
 from jaxsim.core.pytree import pytree_dataclass, static_field
 from jaxsim.core.system import Sensor
 from jaxsim.core.validation import check_finite, check_period_multiple, check_positive
-from jaxsim.plants.marine import rotation_z
+from jaxsim.plants.marine import course_attitude, rotation_z
 
 CAMERA_OUTPUTS = 16  # [x_F (12), z_FR (3), frame flag (1)]
 
@@ -78,16 +78,9 @@ def leader_velocity(p: LeaderParams, t: jax.Array) -> jax.Array:
     return jax.jvp(lambda s: leader_position(p, s), (t,), (jnp.ones_like(t),))[1]
 
 
-def heading_pitch(velocity: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """Yaw and pitch (rad) of a body whose x axis points along ``velocity`` (NED: pitch up > 0)."""
-    vh = jnp.sqrt(velocity[0] ** 2 + velocity[1] ** 2)
-    return jnp.arctan2(velocity[1], velocity[0]), jnp.arctan2(-velocity[2], vh)
-
-
 def leader_euler(p: LeaderParams, t: jax.Array) -> jax.Array:
     """``[φ_L, θ_L, ψ_L]`` with the x axis along the trajectory tangent and no roll."""
-    psi, theta = heading_pitch(leader_velocity(p, t))
-    return jnp.stack([jnp.zeros_like(psi), theta, psi])
+    return course_attitude(leader_velocity(p, t))
 
 
 def target_point(p: LeaderParams, t: jax.Array) -> jax.Array:

@@ -23,9 +23,8 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
-from jaxsim.core.validation import check_finite, is_concrete
+from jaxsim.core.validation import check_covariance
 
 
 def skew(v: jax.Array) -> jax.Array:
@@ -67,6 +66,18 @@ def euler_from_rotation(rot: jax.Array) -> jax.Array:
     theta = -jnp.arcsin(jnp.clip(rot[2, 0], -1.0, 1.0))
     psi = jnp.arctan2(rot[1, 0], rot[0, 0])
     return jnp.stack([phi, theta, psi])
+
+
+def course_attitude(velocity: jax.Array, min_speed: Any = 0.0) -> jax.Array:
+    """``[0, θ, ψ]`` (rad) of a body with no roll whose x axis points along ``velocity (3,)`` (m/s,
+    NED: pitch up > 0).  Where the horizontal speed is at most ``min_speed`` (m/s) the direction is
+    ill-defined: ``[0, 0, 0]`` with zero derivatives (finite under ``jvp``/``grad``)."""
+    h2 = velocity[0] ** 2 + velocity[1] ** 2
+    ok = h2 > jnp.asarray(min_speed) ** 2
+    vh = jnp.sqrt(jnp.where(ok, h2, 1.0))
+    psi = jnp.where(ok, jnp.arctan2(jnp.where(ok, velocity[1], 0.0), jnp.where(ok, velocity[0], 1.0)), 0.0)
+    theta = jnp.where(ok, jnp.arctan2(jnp.where(ok, -velocity[2], 0.0), vh), 0.0)
+    return jnp.stack([jnp.zeros_like(psi), theta, psi])
 
 
 def euler_rate_matrix(euler: jax.Array) -> jax.Array:
@@ -165,18 +176,7 @@ def check_mass_matrix(name: str, mass: Any, *, rtol: float = 1e-10) -> None:
 
     Only the shape is checked on tracers (values are unknown under jit/vmap).
     """
-    if tuple(np.shape(mass)) != (6, 6):
-        raise ValueError(f"{name}: expected a (6, 6) mass matrix, got shape {tuple(np.shape(mass))}")
-    check_finite(name, mass)
-    if not is_concrete(mass):
-        return
-    m = np.asarray(mass, dtype=float)
-    scale = max(float(np.max(np.abs(m))), np.finfo(float).tiny)
-    if float(np.max(np.abs(m - m.T))) > rtol * scale:
-        raise ValueError(f"{name}: mass matrix must be symmetric (max |M − Mᵀ| = {np.max(np.abs(m - m.T)):.3g})")
-    eig = np.linalg.eigvalsh(m)
-    if float(eig[0]) <= rtol * float(eig[-1]) or float(eig[0]) <= 0.0:
-        raise ValueError(f"{name}: mass matrix must be positive definite (smallest eigenvalue {eig[0]:.6g})")
+    check_covariance(name, mass, 6, rtol=rtol, definite=True)
 
 
 def unbalanced_forces(

@@ -77,6 +77,8 @@ def test_bad_input():
         auv_tracking(lam=(0.2, 0.2))
     with pytest.raises(ValueError, match="k_s"):
         auv_tracking(k_s=-jnp.ones(6))
+    with pytest.raises(ValueError, match="t_start"):
+        auv_tracking(t_start=float("inf"))
     with pytest.raises(ValueError, match="camera_period"):
         formation.camera_sensor(camera_period=0.1005, control_period=1e-3)
     with pytest.raises(ValueError, match="pos_std"):
@@ -97,3 +99,21 @@ def test_course_gate_keeps_slow_targets_finite():
     tau = control_force(ctrl.params, x, slow)
     assert np.all(np.isfinite(np.asarray(tau)))
     np.testing.assert_allclose(tau[3:], control_force(ctrl.params, x, still)[3:], atol=1e-9)
+
+
+def test_reference_velocity_applies_lambda_in_body_frame():
+    """Paper eq. 20: ``ν_r = V* + Λ J⁻¹ E`` — with roll/pitch ≠ 0, ``Λ J⁻¹ E ≠ J⁻¹ Λ E`` in attitude.
+    Oracle: the ZYX Euler-rate inverse ``T(Θ)⁻¹`` written out by hand."""
+    from jaxsim.control.auv_tracking import PAPER_LAMBDA, reference_velocity
+
+    phi, theta, psi = 0.3, 0.2, 0.5
+    eta = jnp.array([1.0, 2.0, 3.0, phi, theta, psi])
+    target = jnp.array([[1.0, 2.0, 3.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])  # on target, heading 0
+    lam = jnp.asarray(PAPER_LAMBDA)
+    nu_r = np.asarray(reference_velocity(lam, eta, target))
+    t_inv = np.array([[1.0, 0.0, -np.sin(theta)],
+                      [0.0, np.cos(phi), np.cos(theta) * np.sin(phi)],
+                      [0.0, -np.sin(phi), np.cos(theta) * np.cos(phi)]])
+    e_att = -np.array([phi, theta, psi])  # Θ* = 0
+    np.testing.assert_allclose(nu_r[3:], np.asarray(PAPER_LAMBDA[3:]) * (t_inv @ e_att), atol=1e-12)
+    assert np.abs(nu_r[3:] - t_inv @ (np.asarray(PAPER_LAMBDA[3:]) * e_att)).max() > 1e-3

@@ -89,3 +89,9 @@ def test_bad_input():
         leader_predictor(degree=1)
     with pytest.raises(ValueError, match="meas_std"):
         leader_predictor(meas_std=0.0)
+    with pytest.raises(ValueError, match="p0: expected shape"):
+        leader_predictor(p0=(1.0, 1.0, 1.0))
+    with pytest.raises(ValueError, match="camera_period"):
+        leader_predictor(camera_period=0.0)
+    with pytest.raises(ValueError, match="t_start"):
+        leader_predictor(t_start=float("nan"))

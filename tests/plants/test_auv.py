@@ -116,6 +116,9 @@ def test_kinematics_jacobian():
 def test_bad_input():
     with pytest.raises(ValueError, match="positive definite"):
         auv.auv_plant(auv.AUVParams(M_A=-200.0 * jnp.eye(6)))
+    singular = np.diag([185.0, 255, 255, 15.2, 33, 0.0])  # PSD, not PD: M_A = 0 leaves it singular
+    with pytest.raises(ValueError, match="M .*positive definite"):
+        auv.auv_plant(auv.AUVParams(M_R=singular, M_A=jnp.zeros((6, 6))))
     bad = np.diag([185.0, 255, 255, 15.2, 33, 33])
     bad[0, 1] = 5.0
     with pytest.raises(ValueError, match="symmetric"):
@@ -124,3 +127,16 @@ def test_bad_input():
         auv.auv_plant(auv.AUVParams(d1=-jnp.ones(6)))
     with pytest.raises(ValueError, match="M_R"):
         auv.auv_plant(auv.AUVParams(M_R=jnp.eye(3)))
+
+
+def test_course_attitude_along_velocity_and_guarded_when_slow():
+    """x axis along ``v = (1, 1, −√2)``: ψ = θ = 45° (NED, climbing); rotating e_x by it gives ``v/|v|``.
+    Below ``min_speed`` the attitude and its derivative are exactly 0."""
+    v = jnp.array([1.0, 1.0, -np.sqrt(2.0)])
+    att = marine.course_attitude(v)
+    np.testing.assert_allclose(att, [0.0, np.pi / 4, np.pi / 4], atol=1e-12)
+    np.testing.assert_allclose(marine.rotation_zyx(att)[:, 0], v / 2.0, atol=1e-12)
+    slow = jnp.array([0.05, 0.02, 0.3])
+    val, der = jax.jvp(lambda u: marine.course_attitude(u, 0.1), (slow,), (jnp.array([1.0, -2.0, 3.0]),))
+    assert np.all(np.asarray(val) == 0.0) and np.all(np.asarray(der) == 0.0)
+    assert float(marine.course_attitude(slow)[2]) != 0.0  # unguarded: a heading even when slow
