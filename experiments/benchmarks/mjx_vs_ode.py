@@ -30,6 +30,7 @@ import numpy as np
 
 import jaxsim  # noqa: F401  (float64)
 from jaxsim.core.integrators import EULER, RK4
+from jaxsim.core.rollout import hold_input
 from jaxsim.mjx.trms import TO_ODE, trms_mjcf, trms_mjx_plant
 from jaxsim.plants import trms
 from experiments.benchmarks.timing import median_time, write_json
@@ -37,13 +38,13 @@ from experiments.benchmarks.timing import median_time, write_json
 H = 1e-3  # s, env-step
 
 
-def scan_rollout(field, solver):
-    """``jit(vmap)`` of ``K`` steps ``x ← solver.step(field(·, u_k))`` from ``x0 (B, n)``, ``us (B, K, m)``."""
+def scan_rollout(plant, solver):
+    """``jit(vmap)`` of ``K`` env-steps of ``plant`` (the plant step of ``simulate`` and the envs,
+    :func:`~jaxsim.core.rollout.hold_input`) from ``x0 (B, n)`` under inputs ``us (B, K, m)``."""
 
     def one(x0, us):
         def body(x, u):
-            x = solver.step(lambda t, z: field(z, u, t), 0.0, x, H)
-            return x, None
+            return hold_input(plant, x, u, 0.0, H, 1, solver), None
 
         return jax.lax.scan(body, x0, us)[0]
 
@@ -97,9 +98,9 @@ def main(argv=None) -> dict:
     ode = trms.trms_plant(p)
     mjx_plant = trms_mjx_plant(p, field="step", timestep=H)
     runners = {
-        "ode_rk4": (scan_rollout(ode.f, RK4), x_eq),
-        "ode_euler": (scan_rollout(ode.f, EULER), x_eq),
-        "mjx": (scan_rollout(mjx_plant.f, EULER), x_eq[TO_ODE]),
+        "ode_rk4": (scan_rollout(ode, RK4), x_eq),
+        "ode_euler": (scan_rollout(ode, EULER), x_eq),
+        "mjx": (scan_rollout(mjx_plant, EULER), x_eq[TO_ODE]),
     }
     mj_model = mujoco.MjModel.from_xml_string(trms_mjcf(p, timestep=H))
     rng = np.random.default_rng(0)
