@@ -8,7 +8,8 @@
 * statistics: :class:`Moments` (Chan's mergeable mean/variance), :class:`QuantileSketch`
   (quantiles with a stated relative error bound), :func:`wilson_interval` for event probabilities;
 * designs: :func:`grid`, :func:`latin_hypercube`, :func:`sobol`, :func:`points`;
-* checkpoints: ``out=DIR, resume=True`` (atomic chunk files with checksums, sweep fingerprint).
+* checkpoints: ``out=DIR, resume=True`` (atomic chunk files with checksums, a sweep fingerprint that
+  includes a hash of the per-run computation's jaxpr, so chunks of edited code are never merged).
 """
 
 from jaxsim.montecarlo.designs import Design, grid, latin_hypercube, parse_range, points, single_point, sobol

@@ -11,7 +11,9 @@ Execution: chunks of ``chunk_size`` runs, one after the other; each chunk is one
 sharded over ``devices`` (all of ``jax.devices()`` by default: several host devices with
 ``XLA_FLAGS=--xla_force_host_platform_device_count=K``, several processes/machines after
 ``jax.distributed.initialize``).  With ``out=DIR`` every finished chunk is written atomically to
-a checkpoint folder (:mod:`jaxsim.montecarlo.store`) and ``resume=True`` continues from it.  In a
+a checkpoint folder (:mod:`jaxsim.montecarlo.store`) and ``resume=True`` continues from it — only if
+the folder's fingerprint matches, which covers the computation itself (a hash of the jaxpr of one
+run, :mod:`jaxsim.montecarlo.jaxpr_hash`), so chunks of an edited ``fn`` are never merged.  In a
 multi-process run every process calls :func:`sweep` with the same arguments; process 0 alone reads
 and writes ``out`` and broadcasts what it read, so every process returns the same result.
 """
@@ -31,11 +33,12 @@ from jax.sharding import Mesh, PartitionSpec as P
 
 from jaxsim.montecarlo.designs import Design, single_point
 from jaxsim.montecarlo.distributions import describe_space, is_distribution, validate_space
-from jaxsim.montecarlo.kernel import Leaf, build_chunk_kernel, fetch, metric_layout, run_one, to_global
+from jaxsim.montecarlo.jaxpr_hash import jaxpr_hash
+from jaxsim.montecarlo.kernel import Leaf, build_chunk_kernel, fetch, metric_layout, run_one, to_global, trace_run
 from jaxsim.montecarlo.moments import Moments, PairwiseMerge, merge_moments
 from jaxsim.montecarlo.result import EventStats, MetricStats, MonteCarloResult, RawRuns
 from jaxsim.montecarlo.sketch import QuantileSketch
-from jaxsim.montecarlo.store import ChunkStore, fingerprint_of
+from jaxsim.montecarlo.store import MANIFEST, ChunkStore, fingerprint_of
 
 DEFAULT_CHUNK = 100_000
 MAX_KEEP_RUNS = 100_000
@@ -356,9 +359,14 @@ def sweep(
         sketch: quantile sketch layout, or ``None`` for no quantiles.
         keep_runs: keep the first ``keep_runs`` runs' params and metrics (≤ 100,000).
         devices: ``None`` (all), a count, or a list of devices.
-        out: checkpoint folder; ``resume``: continue the sweep already in it.
+        out: checkpoint folder; ``resume``: continue the sweep already in it.  The folder must hold
+            this very sweep: ``ValueError`` (nothing written) if it holds another one — in
+            particular if ``fn``'s computation changed since the chunks were written (same name,
+            edited body or closed-over configuration: the fingerprint includes the hash of one
+            run's jaxpr, constants' values included).
         name, extra: identity of ``fn`` in the fingerprint (default ``module.qualname``) and any
-            JSON-able configuration that changes what ``fn`` computes.
+            JSON-able configuration that changes what ``fn`` computes (recorded in the manifest;
+            the jaxpr hash covers what ``fn`` closes over as well).
         progress: ``progress(total=, initial=, unit=, unit_scale=, desc=)`` returning a bar with
             ``update(k)``/``close()`` (tqdm, ``experiments.progress.bar``); default silent.
     """
@@ -376,10 +384,12 @@ def sweep(
     space = jax.tree_util.tree_map(np.asarray, space)
 
     point0 = {nm: jnp.zeros((), jnp.result_type(float)) for nm in design.names}
-    leaves, treedef = metric_layout(fn, space, point0, key)
+    jaxpr, out_shapes = trace_run(fn, space, point0, key)
+    leaves, treedef = metric_layout(out_shapes)
     fn_name = name or f"{getattr(fn, '__module__', '?')}.{getattr(fn, '__qualname__', repr(fn))}"
     description = {
-        "format": 1, "name": fn_name, "extra": extra, "space": describe_space(space),
+        "format": 1, "name": fn_name, "computation": jaxpr_hash(jaxpr), "extra": extra,
+        "space": describe_space(space),
         "design": design.describe(), "n": n, "key": key_data.tolist(),
         "key_impl": str(jax.random.key_impl(key)), "block_size": block_size,
         "sketch": None if sketch is None else sketch.describe(),
@@ -452,7 +462,7 @@ def _stored_chunk_size(out: str | Path | None, fingerprint: str) -> int | None:
         return None
     import json
 
-    path = Path(out) / "manifest.json"
+    path = Path(out) / MANIFEST
     try:
         manifest = json.loads(path.read_text())
     except (OSError, ValueError):

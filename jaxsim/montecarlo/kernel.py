@@ -62,10 +62,21 @@ def run_one(fn: Callable[[jax.Array, Any], Any], space: Any, point: dict[str, An
     return params, fn(jax.random.fold_in(k, 1), params)
 
 
-def metric_layout(fn: Callable, space: Any, point: dict[str, Any], key: jax.Array) -> tuple[list[Leaf], Any]:
-    """Leaves of ``fn``'s output (via ``eval_shape``) and its treedef; ``ValueError`` on bad leaves."""
-    # the point is an argument (traced like the real runs), so value checks inside fn see tracers, not zeros
-    out = jax.eval_shape(lambda k, pt: run_one(fn, space, pt, k, jnp.asarray(0))[1], key, point)
+def trace_run(fn: Callable, space: Any, point: dict[str, Any], key: jax.Array) -> tuple[Any, Any]:
+    """The jaxpr of one run, ``(key, space, point, index) -> metrics``, and its output's shapes.
+
+    Key, space, point and run index are all arguments, traced like the real runs (value checks
+    inside ``fn`` see tracers, not zeros; the space's values are not baked in), so the jaxpr depends
+    only on ``fn``, on what it closes over, and on the structure, shapes and dtypes of its inputs.
+    Returns ``(ClosedJaxpr, pytree of ShapeDtypeStruct)``.
+    """
+    index = jnp.zeros((), jnp.result_type(int))
+    one = lambda k, sp, pt, i: run_one(fn, sp, pt, k, i)[1]  # noqa: E731
+    return jax.make_jaxpr(one, return_shape=True)(key, space, point, index)
+
+
+def metric_layout(out: Any) -> tuple[list[Leaf], Any]:
+    """Leaves of ``fn``'s output (shapes from :func:`trace_run`) and its treedef; ``ValueError`` on bad leaves."""
     flat, treedef = jax.tree_util.tree_flatten_with_path(out)
     if not flat:
         raise ValueError("fn: returned no arrays; it must return a pytree of metrics")

@@ -2,8 +2,8 @@
 
 Layout of ``DIR``::
 
-    manifest.json                 {"format", "fingerprint", "description", "layout"}
-    chunks/p00003_c000012.chunk   one finished chunk (point 3, chunk 12)
+    manifest.json                 {"format", "fingerprint", "description", "layout"}   (MANIFEST)
+    chunks/p00003_c000012.chunk   one finished chunk (point 3, chunk 12)               (CHUNKS)
 
 Safety rules:
 
@@ -13,10 +13,13 @@ Safety rules:
 * a chunk file is ``MAGIC | sha256(payload) | len(payload) | payload`` (payload: ``.npz`` bytes with
   the chunk's arrays and its metadata); a missing, truncated or corrupt file, or one whose metadata
   does not match, is reported as absent and recomputed — it is never merged;
-* the manifest fingerprints everything that determines the result (function name, parameter space,
-  design, key, run count, block size, quantile sketch, ...).  Opening a folder that holds a
-  *different* sweep, a folder that is not a sweep folder, or (without ``resume``) a folder that
-  already holds chunks of this sweep raises ``ValueError`` before anything is written.
+* the manifest fingerprints everything that determines the result (function name, a hash of the
+  per-run computation's jaxpr — operations and constants' values, see
+  :mod:`jaxsim.montecarlo.jaxpr_hash` —, parameter space, design, key, run count, block size,
+  quantile sketch, ...).  Opening a folder that holds a *different* sweep (the message names what
+  differs; an edited per-run function is reported as "the per-run computation changed"), a folder
+  that is not a sweep folder, or (without ``resume``) a folder that already holds chunks of this
+  sweep raises ``ValueError`` before anything is written.
 """
 
 from __future__ import annotations
@@ -32,6 +35,8 @@ from typing import Any
 import numpy as np
 
 FORMAT = 1
+MANIFEST = "manifest.json"
+CHUNKS = "chunks"
 MAGIC = b"JXMCCHK1"
 _HEADER = len(MAGIC) + 32 + 8
 _META_KEY = "__meta__"
@@ -92,6 +97,22 @@ def decode_chunk(data: bytes) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     return arrays, meta
 
 
+def _different_sweep(root: Path, manifest: dict[str, Any], fingerprint: str,
+                     description: dict[str, Any]) -> str:
+    """Why ``root`` cannot be opened for this sweep: which parts of the description changed."""
+    old = manifest.get("description") if isinstance(manifest.get("description"), dict) else {}
+    new = json.loads(json.dumps(description, default=str))  # as the manifest stores it
+    changed = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
+    if changed == ["computation"]:
+        was = str(old.get("computation"))[:12] if old.get("computation") else "not recorded"
+        return (f"out: the per-run computation changed since the chunks in {root} were written "
+                f"(computation hash {was} → {str(new['computation'])[:12]}); nothing was written — to run "
+                f"the new code, choose a new folder (without resume=True / --resume) or delete {root}")
+    return (f"out: {root} holds a different sweep (fingerprint {str(manifest.get('fingerprint'))[:12]}…, "
+            f"this sweep {fingerprint[:12]}…; differs in: {', '.join(changed) or 'format'}); "
+            "nothing was written — choose another folder or delete that one")
+
+
 class ChunkStore:
     """The checkpoint folder of one sweep (see module docstring)."""
 
@@ -99,13 +120,13 @@ class ChunkStore:
                  layout: dict[str, Any], resume: bool):
         self.root = Path(root)
         self.fingerprint = fingerprint
-        self.chunks_dir = self.root / "chunks"
+        self.chunks_dir = self.root / CHUNKS
         self.rejected: list[tuple[str, str]] = []  # (file name, why) of damaged chunks found
         self._open(description, layout, resume)
 
     # -- opening ---------------------------------------------------------------------------
     def _open(self, description: dict[str, Any], layout: dict[str, Any], resume: bool) -> None:
-        manifest_path = self.root / "manifest.json"
+        manifest_path = self.root / MANIFEST
         if manifest_path.exists():
             try:
                 manifest = json.loads(manifest_path.read_text())
@@ -113,10 +134,7 @@ class ChunkStore:
                 raise ValueError(f"out: {self.root}/manifest.json is unreadable ({exc}); "
                                  "refusing to write into this folder") from None
             if manifest.get("fingerprint") != self.fingerprint:
-                raise ValueError(
-                    f"out: {self.root} holds a different sweep (fingerprint "
-                    f"{str(manifest.get('fingerprint'))[:12]}…, this sweep {self.fingerprint[:12]}…); "
-                    "nothing was written — choose another folder or delete that one")
+                raise ValueError(_different_sweep(self.root, manifest, self.fingerprint, description))
             if manifest.get("layout") != layout:
                 raise ValueError(
                     f"chunk_size: {self.root} was written with layout {manifest.get('layout')}, "

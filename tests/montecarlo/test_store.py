@@ -2,6 +2,8 @@
 
 import os
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
@@ -89,3 +91,55 @@ def test_chunk_encoding_detects_every_kind_of_damage():
     flipped[60] ^= 1
     with pytest.raises(ValueError, match="checksum"):
         decode_chunk(bytes(flipped))
+
+
+# -- resume after a code change: the fingerprint covers the computation, not only the function's name
+
+EDITED_N, EDITED_BLOCK, EDITED_CHUNK = 600, 100, 200  # 3 chunks per point
+EDITED_SPACE = {"a": mc.normal(1.0, 0.5), "gain": 2.0}
+
+
+def _metric_from_source(body: str):
+    """``metric(key, p)`` defined from source, always as ``study_metrics.metric`` — as if a user
+    edited the body of the same function in the same file between two runs."""
+    namespace = {"jax": jax, "jnp": jnp}
+    exec(compile(f"def metric(key, p):\n    return {body}\n", "study_metrics.py", "exec"), namespace)
+    namespace["metric"].__module__ = "study_metrics"
+    return namespace["metric"]
+
+
+V1 = '{"y": p["gain"] * p["a"] + jax.random.normal(key)}'
+V2 = '{"y": p["gain"] * p["a"] - jax.random.normal(key)}'  # same name, signature and output layout
+
+
+def _edited_sweep(fn, out=None, **kw):
+    return mc.sweep(fn, EDITED_SPACE, mc.grid({"gain": (1.0, 2.0, 2)}), EDITED_N, 5,
+                    block_size=EDITED_BLOCK, chunk_size=EDITED_CHUNK, out=out, **kw)
+
+
+def test_resume_after_the_per_run_function_changed_is_refused_naming_the_change(tmp_path):
+    out = tmp_path / "sweep"
+    first = _edited_sweep(_metric_from_source(V1), out)
+    assert first.chunks_computed == 6
+    before = _snapshot(out)
+    edited = _metric_from_source(V2)
+    assert edited.__module__ + "." + edited.__qualname__ == "study_metrics.metric"
+    for resume in (True, False):
+        with pytest.raises(ValueError, match=r"per-run computation changed since the chunks in .*sweep "
+                                             r"were written \(computation hash [0-9a-f]{12} → [0-9a-f]{12}\)"):
+            _edited_sweep(edited, out, resume=resume)
+    assert _snapshot(out) == before  # nothing merged, nothing written
+
+
+def test_resume_with_identical_code_loads_the_chunks_and_equals_an_uninterrupted_run(tmp_path):
+    out = tmp_path / "sweep"
+    _edited_sweep(_metric_from_source(V1), out)
+    chunks = sorted((out / "chunks").glob("*.chunk"))
+    for c in chunks[1::2]:  # as if killed before these were written
+        c.unlink()
+    again = _metric_from_source(V1)  # a new function object from the same source
+    resumed = _edited_sweep(again, out, resume=True)
+    assert resumed.chunks_loaded == 3 and resumed.chunks_computed == 3 and not resumed.rejected_chunks
+    _same(resumed, _edited_sweep(again))  # no folder: one uninterrupted run
+    other = _edited_sweep(_metric_from_source(V2))
+    assert not np.array_equal(other.points[1]["y"].mean, resumed.points[1]["y"].mean)  # the edit matters
