@@ -1,5 +1,12 @@
 """Command line: ``python -m experiments list``, ``run NAME`` and ``sweep NAME`` (see
-:mod:`experiments.sweep_command`)."""
+:mod:`experiments.sweep_command`).
+
+``run NAME --out DIR`` refuses, before computing anything, a folder that holds anything but this
+study's previous output or that cannot be written (:mod:`experiments.output_folder`), writes the
+report into a fresh folder beside ``DIR`` and swaps it in at the end: a failed or interrupted run
+leaves the previous output intact.  Every refusal and every ``OSError`` ends with one
+``error: ...`` line on stderr and exit code 2.
+"""
 
 from __future__ import annotations
 
@@ -10,6 +17,7 @@ import time
 from pathlib import Path
 
 from experiments.config_overrides import apply_overrides
+from experiments.output_folder import staged_output
 from experiments.progress import bar
 from experiments.registry import all_studies, get_study
 from experiments.report import write_report
@@ -52,10 +60,16 @@ def main(argv: list[str] | None = None) -> int:
         out = Path(args.out) if args.out else Path("results") / study.name
         print(f"[{study.name}] config: {config}", file=sys.stderr)
         start = time.perf_counter()
-        result = study.run(config, bar)
-        path = write_report(study.name, config, result, out)
+        with staged_output(out, study.name) as staging:  # refuses a foreign/unwritable folder first
+            result = study.run(config, bar)
+            write_report(study.name, config, result, staging)
+        path = out / "results.json"
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # e.g. the disk filled up or a folder was made read-only while running
+        where = f" ({exc.filename})" if exc.filename else ""
+        print(f"error: {exc.strerror or exc}{where}", file=sys.stderr)
         return 2
     print(f"[{study.name}] done in {time.perf_counter() - start:.1f} s; wrote {path}", file=sys.stderr)
     for key, value in result.metrics.items():

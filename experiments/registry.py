@@ -9,7 +9,7 @@ import experiments
 from experiments.study import Study
 
 _INFRASTRUCTURE = {"cli", "registry", "study", "report", "progress", "config_overrides", "benchmarks",
-                   "sweep_command"}
+                   "sweep_command", "output_folder"}
 
 
 def all_studies() -> dict[str, Study]:

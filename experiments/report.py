@@ -1,17 +1,17 @@
 """Write a :class:`~experiments.study.StudyResult` to an output folder.
 
 ``DIR/results.json`` (keys ``study``, ``config``, ``assumptions``, ``metrics``, ``tables``,
-``notes``), one CSV per table and one PNG per figure.  Non-finite numbers in tables are written as
-the strings ``"inf"``, ``"-inf"``, ``"nan"`` so the JSON stays standard.
+``notes``), one CSV per table and one PNG per figure, each written atomically.  Non-finite numbers
+in tables are written as the strings ``"inf"``, ``"-inf"``, ``"nan"`` so the JSON stays standard.
 """
 
 from __future__ import annotations
 
 import csv
 import dataclasses
+import io
 import json
 import math
-import os
 from pathlib import Path
 from typing import Any
 
@@ -38,14 +38,33 @@ def _plain(x: Any) -> Any:
     return x
 
 
-def _atomic_write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+def report_file_names(result: StudyResult) -> list[str]:
+    """Names of the files :func:`write_report` writes for ``result`` (``results.json`` first)."""
+    return (["results.json"] + [f"{name}.csv" for name, rows in result.tables.items() if rows]
+            + [f"{name}.png" for name in result.figures])
+
+
+def _csv_bytes(rows: list[dict[str, Any]]) -> bytes:
+    header = list(rows[0].keys())
+    for row in rows[1:]:
+        header += [k for k in row if k not in header]
+    buf = io.StringIO(newline="")
+    writer = csv.DictWriter(buf, fieldnames=header)
+    writer.writeheader()
+    for row in rows:
+        writer.writerow(_plain(row))
+    return buf.getvalue().encode()
 
 
 def write_report(study_name: str, config: Any, result: StudyResult, out_dir: str | Path) -> Path:
-    """Write everything; returns the path of ``results.json``."""
+    """Write everything (files named by :func:`report_file_names`); returns the path of ``results.json``.
+
+    Every file is written atomically (temporary file, ``fsync``, rename), ``results.json`` last, so
+    a reader never sees half a file.  The folder is created if needed; whether it may be written
+    at all is the caller's question (:mod:`experiments.output_folder`).
+    """
+    from jaxsim.montecarlo.store import atomic_write_bytes  # not at import: `sweep --devices` sets up JAX first
+
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     for name, value in result.metrics.items():
@@ -60,26 +79,18 @@ def write_report(study_name: str, config: Any, result: StudyResult, out_dir: str
         "notes": list(result.notes),
     }
     for name, rows in result.tables.items():
-        if not rows:
-            continue
-        header = list(rows[0].keys())
-        for row in rows[1:]:
-            header += [k for k in row if k not in header]
-        path = out / f"{name}.csv"
-        with open(path.with_name(path.name + ".tmp"), "w", newline="") as fh:
-            writer = csv.DictWriter(fh, fieldnames=header)
-            writer.writeheader()
-            for row in rows:
-                writer.writerow(_plain(row))
-        os.replace(path.with_name(path.name + ".tmp"), path)
+        if rows:
+            atomic_write_bytes(out / f"{name}.csv", _csv_bytes(rows))
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     for name, fig in result.figures.items():
-        fig.savefig(out / f"{name}.png", dpi=120, bbox_inches="tight")
+        png = io.BytesIO()
+        fig.savefig(png, format="png", dpi=120, bbox_inches="tight")
         plt.close(fig)
+        atomic_write_bytes(out / f"{name}.png", png.getvalue())
     results_path = out / "results.json"
-    _atomic_write_text(results_path, json.dumps(payload, indent=2, allow_nan=False) + "\n")
+    atomic_write_bytes(results_path, (json.dumps(payload, indent=2, allow_nan=False) + "\n").encode())
     return results_path

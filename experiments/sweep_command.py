@@ -13,7 +13,12 @@ run (``jax.distributed.initialize``): start the same command on every machine wi
 
 Writes ``DIR/results.json``, ``DIR/sweep.csv`` (one row per point), ``DIR/sweep_<metric>.png``
 (or ``distribution.png`` for a single point) and the checkpoint folder's ``manifest.json`` and
-``chunks/``.
+``chunks/``.  ``DIR`` is the checkpoint folder too, so it is written as the sweep goes; before
+anything is computed it is refused if it holds anything but this study's previous sweep output or
+cannot be written (:mod:`experiments.output_folder`; whether its checkpoint is this very sweep —
+same parameters, same per-run computation — and whether ``--resume`` is needed is checked by
+:mod:`jaxsim.montecarlo.store`).  The report files are written atomically, then the folder's
+marker ``jaxsim-output.json``.
 """
 
 from __future__ import annotations
@@ -112,7 +117,8 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     from experiments.config_overrides import apply_overrides
     from experiments.progress import bar
     from experiments.registry import all_studies, get_study
-    from experiments.report import write_report
+    from experiments.output_folder import check_output_folder, write_marker
+    from experiments.report import report_file_names, write_report
     from experiments.study import StudyResult
     from jaxsim.montecarlo.plots import plot_distribution, plot_sweep
 
@@ -130,7 +136,8 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     space = {**spec.nominal, **spec.uncertain}
     out = Path(args.out) if args.out else Path("results") / f"{study.name}-sweep"
     main = jax.process_index() == 0
-    if main:
+    if main:  # process 0 alone writes --out
+        check_output_folder(out, study.name, "sweep")  # foreign or unwritable: refused before computing
         print(f"[{study.name}] sweep: {len(design)} point(s) × {args.runs} runs on "
               f"{len(jax.devices()) if args.devices is None else args.devices} device(s), "
               f"{jax.process_count()} process(es) → {out}", file=sys.stderr)
@@ -167,7 +174,10 @@ def run_sweep_command(args: argparse.Namespace) -> int:
              f"fingerprint {result.fingerprint}"]
     notes += [f"damaged chunk recomputed: {f} ({why})" for f, why in result.rejected_chunks]
     study_result = StudyResult(metrics=metrics, tables=tables, figures=figures, notes=notes)
+    files = report_file_names(study_result)
+    write_marker(out, study.name, "sweep", files, final=False)  # listed before they exist: crash-safe
     path = write_report(f"{study.name} (sweep)", config, study_result, out)
+    write_marker(out, study.name, "sweep", files)  # stale files of an earlier report removed
     print(f"[{study.name}] sweep done in {wall:.1f} s ({result.chunks_computed} chunk(s) computed, "
           f"{result.chunks_loaded} loaded); wrote {path}", file=sys.stderr)
     return 0
