@@ -248,3 +248,21 @@ def test_sweep_refuses_a_users_files_and_keeps_its_own_folder_tidy_across_resume
     assert cli.main([*args, "--resume"]) == 2
     assert "notes.txt" in _one_error_line(capsys)
     assert (out / "notes.txt").read_text() == "a user's note"
+
+
+def test_sweep_resume_after_the_studys_metric_was_edited_is_refused(tmp_path, fake, capsys, monkeypatch):
+    out = tmp_path / "sweep"
+    args = ["sweep", "fake", "--runs", "10", "--out", str(out)]
+    assert cli.main(args) == 0
+    before = _snapshot(out)
+
+    def _metric(key, p):  # the same function, body edited
+        return {"y": p["a"] + 0.5 * jax.random.normal(key)}
+
+    edited = Study("fake", "a fake study", Config, fake, per_run=lambda cfg: PerRun(_metric, {"a": 1.0}))
+    monkeypatch.setattr(registry, "get_study", lambda name: edited)
+    capsys.readouterr()
+    assert cli.main([*args, "--resume"]) == 2
+    line = _one_error_line(capsys)
+    assert f"the per-run computation changed since the chunks in {out} were written (computation hash" in line
+    assert _snapshot(out) == before
