@@ -45,13 +45,18 @@ from typing import Any, Iterator
 MARKER = "jaxsim-output.json"
 COMMANDS = ("run", "sweep")
 _SHOWN = 5  # offending files named in a refusal
-_TEMPORARY = re.compile(r"\.[^/]+\.tmp-\d+")  # atomic_write_bytes' temporaries (a crash's leftovers)
+_PROBE = ".jaxsim-probe-"
+# a crash's leftovers: temporaries of atomic_write_bytes, writability probes
+_TEMPORARY = re.compile(r"\.[^/]+\.tmp-\d+|" + re.escape(_PROBE) + r"[^/]+")
 
 
 def _listing(folder: Path) -> list[str]:
     """Every file under ``folder`` (relative, ``/``-separated; empty sub-folders as ``name/``), sorted."""
+    def unreadable(exc: OSError) -> None:  # os.walk would skip it: a folder we cannot list is not "empty"
+        raise exc
+
     found = []
-    for root, dirs, files in os.walk(folder):
+    for root, dirs, files in os.walk(folder, onerror=unreadable):
         rel = Path(root).relative_to(folder)
         found += [(rel / f).as_posix() for f in files]
         found += [(rel / d).as_posix() + "/" for d in dirs
@@ -65,7 +70,8 @@ def _read_marker(folder: Path) -> dict[str, Any] | None:
         return None
     try:
         marker = json.loads(path.read_text())
-        if not isinstance(marker, dict) or not isinstance(marker.get("files"), list):
+        files = marker.get("files") if isinstance(marker, dict) else None
+        if not isinstance(files, list) or not all(isinstance(f, str) for f in files):
             raise ValueError("not a marker of this toolkit")
     except (OSError, ValueError) as exc:
         raise ValueError(f"out: {path} is unreadable ({exc}); refusing to write into {folder}") from None
@@ -102,7 +108,7 @@ def _check_owner(folder: Path, study: str, command: str) -> None:
 def _probe(folder: Path) -> None:
     """Create and remove a file in ``folder``; ``ValueError`` if the OS refuses."""
     try:
-        fd, name = tempfile.mkstemp(prefix=".jaxsim-probe-", dir=folder)
+        fd, name = tempfile.mkstemp(prefix=_PROBE, dir=folder)
         os.close(fd)
         os.unlink(name)
     except OSError as exc:

@@ -240,8 +240,11 @@ def test_sweep_refuses_a_users_files_and_keeps_its_own_folder_tidy_across_resume
 
     for name in report - {"raw_runs.csv"}:  # as if killed before the report: only the checkpoint is left
         (out / name).unlink()
+    (out / ".sweep.csv.tmp-4242").write_text("half")  # and the leftovers of a kill while writing
+    (out / ".jaxsim-probe-x1y2").write_text("")
     capsys.readouterr()
     assert cli.main([*args, "--resume"]) == 0
+    assert not list(out.glob(".*"))
     res = json.loads((out / "results.json").read_text())
     assert res["metrics"]["chunks_loaded"] == 2 and res["metrics"]["chunks_computed"] == 0
     (out / "notes.txt").write_text("a user's note")
