@@ -28,7 +28,8 @@ def check_shape(name: str, x: Any, shape: tuple[int | None, ...]) -> None:
     """Require ``x.shape`` to match ``shape`` (``None`` matches any length)."""
     actual = tuple(np.shape(x))
     if not _shape_matches(actual, shape):
-        want = "(" + ", ".join("any" if s is None else str(s) for s in shape) + ")"
+        dims = ["any" if s is None else str(s) for s in shape]
+        want = "(" + ", ".join(dims) + ("," if len(dims) == 1 else "") + ")"
         raise ValueError(f"{name}: expected shape {want}, got {actual}")
 
 
