@@ -36,9 +36,10 @@ from jaxsim.core.system import Controller, Estimator, Plant, Sensor, subtract_in
 from jaxsim.core.validation import check_finite, check_period_multiple, check_positive, check_returns_shape
 
 MAX_STEPS = 2**31 - 1
-"""Longest rollout accepted, in plant integration steps ``t_final/dt``: the tick counter stays
-within int32 (the default integer without x64), and a longer rollout would run for hours per
-trajectory.  :meth:`Timing.resolve` rejects anything longer with a ``ValueError``."""
+"""Longest rollout accepted, in plant integration steps ``t_final/dt``: the tick counter ``k``
+(and ``t = k·Ts``) stays within int32, the default integer without x64; at that length one
+trajectory already takes minutes even for a 2-state plant, and 1e12 steps would seem to hang.
+:meth:`Timing.resolve` rejects anything longer with a ``ValueError`` that says so."""
 
 
 @pytree_dataclass
