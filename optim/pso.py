@@ -2,7 +2,8 @@
 
 Per iteration ``i`` (the order pyswarms uses, so the two compare setting for setting):
 
-1. evaluate the whole swarm in one ``vmap``ped call (non-finite losses count as ``+inf``);
+1. evaluate the whole swarm in one ``vmap``ped call (non-finite losses count as ``+inf``; a run in
+   which every loss was non-finite raises ``ValueError``);
 2. update personal bests, then each particle's neighbourhood best: the whole swarm
    (``topology="global"``, gbest) or the ``neighbors`` particles on either side by index on a ring
    (``"ring"``, lbest);
@@ -32,7 +33,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from optim.results import SearchHistory, SearchResult, as_box, check_int
+from optim.results import SearchHistory, SearchResult, as_box, check_int, check_some_loss_finite
 
 Topology = Literal["global", "ring"]
 BoundMode = Literal["reflect", "clip", "absorb"]
@@ -202,6 +203,9 @@ def pso(
 
     The host syncs every ``iters_per_call`` iterations (rounded down to a divisor of ``n_iters``);
     the wall time of the iterations inside one call is interpolated linearly (they cost the same).
+
+    Raises ``ValueError`` ("loss: not finite (NaN/inf) at any evaluated point …", the error
+    :func:`optim.tune.tune` raises too) when no particle ever saw a finite loss.
     """
     lo, hi = as_box(lo, hi)
     if isinstance(inertia, list):
@@ -225,12 +229,12 @@ def pso(
         now = time.perf_counter() - start
         wall[i:i + chunk] = last + (now - last) * np.arange(1, chunk + 1) / chunk
         last = now
+    check_some_loss_finite(best[-1], f"{cfg.n_particles} particles × {cfg.n_iters} iterations",
+                           "check the loss over the box lo..hi")
     i_best = int(jnp.argmin(state.pbest_loss))
     n_sims = cfg.n_particles * cfg.n_iters * sims_per_eval
     sims = cfg.n_particles * sims_per_eval * np.arange(1, cfg.n_iters + 1)
     message = f"{cfg.n_iters} iterations of {cfg.n_particles} particles ({cfg.topology} topology)"
-    if not np.isfinite(best[-1]):
-        message += "; every evaluated loss was non-finite"
     return SearchResult(
         x=state.pbest_position[i_best],
         loss=float(state.pbest_loss[i_best]),

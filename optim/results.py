@@ -52,6 +52,16 @@ def as_box(lo: Any, hi: Any) -> tuple[jnp.ndarray, jnp.ndarray]:
     return jnp.asarray(a), jnp.asarray(b)
 
 
+def check_some_loss_finite(best_loss: float, where: str, hint: str = "") -> None:
+    """Raise the error every tuner and search shares when no evaluated loss was finite.
+
+    ``where`` says what was evaluated (``"30 particles × 100 iterations"``), ``hint`` what to check.
+    """
+    if not np.isfinite(best_loss):
+        raise ValueError(f"loss: not finite (NaN/inf) at any evaluated point ({where}); nothing to "
+                         f"return{'; ' + hint if hint else ''}")
+
+
 def check_int(name: str, value: Any, minimum: int = 1) -> int:
     """Require an integer ``≥ minimum`` (bools rejected); return it as ``int``."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:

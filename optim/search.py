@@ -2,7 +2,8 @@
 
 Both evaluate ``loss(x)`` (``x`` of shape ``(d,)``) for every point in batches of ``batch_size``
 with one compiled function (the last batch is padded and the padding masked), and record the best
-loss, the simulations and the wall time after every batch.  Non-finite losses never win.
+loss, the simulations and the wall time after every batch.  Non-finite losses never win; if no
+loss is finite, ``ValueError`` (the error :func:`optim.tune.tune` raises too).
 
 * :func:`random_search` — ``n`` points uniform in ``[lo, hi]``; batch ``b`` draws its
   ``batch_size`` points from ``fold_in(key, b)`` (the same key and ``batch_size`` reproduce a run).
@@ -21,7 +22,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from optim.results import SearchHistory, SearchResult, as_box, check_int
+from optim.results import SearchHistory, SearchResult, as_box, check_int, check_some_loss_finite
 
 
 def grid_axes(lo: np.ndarray, hi: np.ndarray, counts: tuple[int, ...]) -> np.ndarray:
@@ -76,10 +77,9 @@ def _run_batches(loss: Callable[[jax.Array], jax.Array], source: jax.Array, lo: 
             best_loss, best_x = val, x
         hist_best[b] = best_loss
         hist_wall[b] = time.perf_counter() - start
+    check_some_loss_finite(best_loss, f"{label}: {n} points", "check the loss over the box lo..hi")
     sims = np.minimum(np.arange(1, n_batches + 1) * batch_size, n) * sims_per_eval
     message = f"{label}: {n} points in {n_batches} batch(es)"
-    if not np.isfinite(best_loss):
-        message += "; every evaluated loss was non-finite"
     return SearchResult(
         x=best_x, loss=float(best_loss), history=SearchHistory(hist_best, sims, hist_wall),
         n_sims=int(n * sims_per_eval), wall_s=float(hist_wall[-1]), compile_s=float(compile_s),

@@ -46,7 +46,7 @@ from jax.flatten_util import ravel_pytree
 
 from jaxsim.core.validation import check_finite
 from optim.reparam import apply, check_domain, invert
-from optim.results import check_int
+from optim.results import check_int, check_some_loss_finite
 
 FORWARD_MODE_MAX_PARAMS = 32
 """``mode="auto"`` uses forward mode up to this many unconstrained parameters.
@@ -443,9 +443,9 @@ def tune(
     carry, rec, reason = _run_steps(step_fn, carry, steps, cfg, callback)
     wall = rec.wall[-1]
     idx, best_loss = _best_index_and_loss(carry, cfg.tol, cfg.al)
-    if not np.isfinite(best_loss):
-        raise ValueError("loss: non-finite (NaN/inf) at every start's first point, nothing to keep; "
-                         f"check params0 and the loss (first values {np.asarray(rec.f[0])})")
+    # a start whose loss or gradient is not finite stops there: its first point was all it evaluated
+    check_some_loss_finite(best_loss, f"the first point of each of the {n_starts} start(s)",
+                           f"check params0 and the loss (first values {np.asarray(rec.f[0])})")
     history = _history(rec)
     best_u = jax.tree_util.tree_map(lambda a: a[idx], carry.best_u)
     return TuneResult(

@@ -10,6 +10,11 @@ the condition above; LAPACK Schur, so CPU).  Derivatives: the solution is define
 ``lax.custom_linear_solve`` — the tangent solves the same equation with the differentiated
 right-hand side, and the cotangent solves the *adjoint* equation (``A`` replaced by ``Aᵀ``); the
 Schur iterations are never differentiated.  Works under ``jit``, ``vmap``, ``grad``, ``jacfwd``.
+
+Singular equations (``A = 0``, eigenvalues ``±iω`` or a zero eigenvalue in the continuous case, a
+reciprocal pair ``λ_i λ_j = 1`` — e.g. eigenvalues on the unit circle — in the discrete case; tested
+to round-off, see :mod:`jaxsim.control._bartels_stewart`) raise ``ValueError`` naming the eigenvalue
+pair when ``a`` is concrete; inside ``jit``/``vmap`` they return an all-NaN ``X``.
 """
 
 from __future__ import annotations
@@ -18,10 +23,10 @@ import jax
 import jax.numpy as jnp
 
 from jaxsim.control import _bartels_stewart as bs
-from jaxsim.core.validation import check_finite, check_square
+from jaxsim.core.validation import check_finite, check_square, is_concrete
 
 
-def _check(a: jax.Array, q: jax.Array) -> tuple[jax.Array, jax.Array]:
+def _check(kind: str, a: jax.Array, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     a = jnp.asarray(a)
     q = jnp.asarray(q)
     check_square("a", a)
@@ -30,7 +35,10 @@ def _check(a: jax.Array, q: jax.Array) -> tuple[jax.Array, jax.Array]:
     check_finite("a", a)
     check_finite("q", q)
     dtype = jnp.result_type(a, q, float)
-    return a.astype(dtype), q.astype(dtype)
+    a, q = a.astype(dtype), q.astype(dtype)
+    if is_concrete(a):
+        bs.check_unique(kind, a)
+    return a, q
 
 
 def solve_continuous_lyapunov(a: jax.Array, q: jax.Array) -> jax.Array:
@@ -41,9 +49,15 @@ def solve_continuous_lyapunov(a: jax.Array, q: jax.Array) -> jax.Array:
         q: ``(n, n)`` right-hand side (symmetric ``q`` gives a symmetric ``X``).
 
     Returns:
-        ``X`` of shape ``(n, n)``.
+        ``X`` of shape ``(n, n)``; all NaN for a singular equation under ``jit``.
+
+    Raises:
+        ValueError: shapes, non-finite entries, or (concrete ``a``) a singular equation: some
+            ``λ_i + λ_j`` (eigenvalues of ``a``) zero to round-off; the message names the pair.
     """
-    return continuous_lyapunov_unchecked(*_check(a, q))
+    a, q = _check("continuous", a, q)
+    x = continuous_lyapunov_unchecked(a, q)
+    return x if is_concrete(a) else bs.nan_if_singular("continuous", x, a)
 
 
 def continuous_lyapunov_unchecked(a: jax.Array, q: jax.Array) -> jax.Array:
@@ -58,8 +72,14 @@ def continuous_lyapunov_unchecked(a: jax.Array, q: jax.Array) -> jax.Array:
 
 
 def solve_discrete_lyapunov(a: jax.Array, q: jax.Array) -> jax.Array:
-    """Solve ``A X Aᵀ − X + Q = 0`` for ``X`` (shapes as in :func:`solve_continuous_lyapunov`)."""
-    return discrete_lyapunov_unchecked(*_check(a, q))
+    """Solve ``A X Aᵀ − X + Q = 0`` for ``X`` (shapes as in :func:`solve_continuous_lyapunov`).
+
+    Singular when some ``λ_i λ_j = 1`` (to round-off): ``ValueError`` naming the pair for a
+    concrete ``a``, an all-NaN ``X`` under ``jit``.
+    """
+    a, q = _check("discrete", a, q)
+    x = discrete_lyapunov_unchecked(a, q)
+    return x if is_concrete(a) else bs.nan_if_singular("discrete", x, a)
 
 
 def discrete_lyapunov_unchecked(a: jax.Array, q: jax.Array) -> jax.Array:

@@ -27,6 +27,8 @@ from typing import Sequence
 import numpy as np
 import scipy.optimize
 
+from jaxsim.core.validation import check_finite
+
 Structure = str  # "P", "PI", "PD", "PID"
 
 
@@ -34,6 +36,17 @@ def _trim(p: np.ndarray) -> np.ndarray:
     p = np.atleast_1d(np.asarray(p, float))
     nz = np.flatnonzero(np.abs(p) > 0)
     return p[nz[0]:] if nz.size else np.zeros(1)
+
+
+def _check_poly(name: str, p: Sequence[float], what: str, why: str) -> np.ndarray:
+    """A finite, not identically zero 1-D coefficient vector (descending powers of s)."""
+    arr = np.atleast_1d(np.asarray(p, float))
+    if arr.ndim != 1 or arr.size == 0:
+        raise ValueError(f"{name}: expected a 1-D coefficient vector, got shape {arr.shape}")
+    check_finite(name, arr)
+    if not np.any(arr):
+        raise ValueError(f"{name}: the plant {what} is identically zero (got {arr.tolist()}): {why}")
+    return arr
 
 
 def controller_polynomials(structure: Structure, gains: Sequence[float], tf: float = 0.0):
@@ -160,9 +173,14 @@ def max_stability_degree(
             in ``[1e-3, gain_scale]``).
 
     Raises:
-        ValueError: unknown structure, or a design whose stability degree is unbounded (as many
-            free gains as closed-loop poles: the poles can be moved arbitrarily far left).
+        ValueError: unknown structure, ``num`` or ``den`` identically zero or not finite (a zero
+            numerator leaves no loop to design: every gain gives the open-loop poles), or a design
+            whose stability degree is unbounded (as many free gains as closed-loop poles: the
+            poles can be moved arbitrarily far left).
     """
+    num = _check_poly("num", num, "numerator", "no controller gain reaches the closed-loop poles, "
+                      "so there is nothing to design")
+    den = _check_poly("den", den, "denominator", "not a transfer function")
     fixed = dict(fixed or {})
     names = gain_names(structure)
     for key in fixed:

@@ -31,9 +31,15 @@ import numpy as np
 
 from jaxsim.core.integrators import RK4, Solver
 from jaxsim.core.pytree import pytree_dataclass, static_field
-from jaxsim.core.signals import Constant
+from jaxsim.core.signals import Constant, check_signal
 from jaxsim.core.system import Controller, Estimator, Plant, Sensor, subtract_input_disturbance
-from jaxsim.core.validation import check_finite, check_period_multiple, check_positive
+from jaxsim.core.validation import check_finite, check_period_multiple, check_positive, check_returns_shape
+
+MAX_STEPS = 2**31 - 1
+"""Longest rollout accepted, in plant integration steps ``t_final/dt``: the tick counter ``k``
+(and ``t = k·Ts``) stays within int32, the default integer without x64; at that length one
+trajectory already takes minutes even for a 2-state plant, and 1e12 steps would seem to hang.
+:meth:`Timing.resolve` rejects anything longer with a ``ValueError`` that says so."""
 
 
 @pytree_dataclass
@@ -56,7 +62,8 @@ class Timing:
     """Time grid of a rollout (all in the model's time unit).
 
     Attributes:
-        t_final: horizon; must be a multiple of the controller period.
+        t_final: horizon; must be a multiple of the controller period, and ``t_final/dt`` at most
+            :data:`MAX_STEPS`.
         dt: plant integration step.
         controller_period: controller period ``Ts`` (default ``dt``); multiple of ``dt``.
         save_every: store one tick in ``save_every``; must divide the number of ticks.
@@ -75,6 +82,10 @@ class Timing:
         """Validate and return ``(n_ticks, substeps, sensor_every)``."""
         check_positive("dt", self.dt)
         check_positive("t_final", self.t_final)
+        steps = float(self.t_final) / float(self.dt)
+        if steps > MAX_STEPS + 0.5:
+            raise ValueError(f"t_final: t_final/dt = {steps:.6g} steps exceeds the limit of {MAX_STEPS} "
+                             "(2**31 − 1) integration steps per rollout; shorten t_final or enlarge dt")
         substeps = check_period_multiple("controller_period", self.ts, self.dt, "dt")
         n_ticks = check_period_multiple("t_final", self.t_final, self.ts, "controller_period")
         sensor_every = 1
@@ -161,8 +172,46 @@ def hold_input(
     return jax.lax.fori_loop(0, substeps, one, x)
 
 
+def _check_plant(plant: Plant, x0: jax.Array, t0: jax.Array) -> None:
+    """``output`` must return ``(n_outputs,)`` and ``dynamics`` ``(n_states,)`` (traced, not run)."""
+    label = f"plant {plant.name!r}"
+    check_returns_shape(f"{label}: output(params, x)", plant.output, plant.params, x0,
+                        shape=(plant.n_outputs,))
+    u0 = jnp.zeros(plant.n_inputs, x0.dtype)
+    check_returns_shape(f"{label}: dynamics(params, x, u, t)", plant.dynamics, plant.params, x0, u0, t0,
+                        shape=(plant.n_states,))
+
+
+def _check_input_shapes(loop: ClosedLoop, u: jax.ShapeDtypeStruct, r0: jax.Array, t0: jax.Array) -> None:
+    """The controller output (given the reference) and the disturbed plant input must be ``(m,)``."""
+    plant, ctrl = loop.plant, loop.controller
+    m, p = plant.n_inputs, plant.n_outputs
+    if u.shape != (m,):
+        if r0.shape != (p,):
+            raise ValueError(
+                f"reference: the signal has shape {tuple(r0.shape)} at t = 0, but plant {plant.name!r} has "
+                f"n_outputs={p}; controller {ctrl.name!r} then returns u of shape {tuple(u.shape)}, "
+                f"expected ({m},) (n_inputs={m})")
+        raise ValueError(
+            f"controller {ctrl.name!r}: step(params, state, r, y, dt) returns u of shape {tuple(u.shape)}, "
+            f"expected ({m},) for plant {plant.name!r} (n_inputs={m})")
+    d0 = jax.eval_shape(loop.disturbance, t0)
+    actuated = jax.eval_shape(loop.actuate, u, d0)
+    if actuated.shape != (m,):
+        raise ValueError(
+            f"disturbance: the signal has shape {tuple(d0.shape)} at t = 0; actuate(u, d) then gives a "
+            f"plant input of shape {tuple(actuated.shape)}, expected ({m},) (plant {plant.name!r} has "
+            f"n_inputs={m})")
+
+
 def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | None, solver: Solver):
-    """Validate, then return ``(tick, carry0, n_ticks)`` with ``tick(carry) -> (carry, Tick)``."""
+    """Validate, then return ``(tick, carry0, n_ticks)`` with ``tick(carry) -> (carry, Tick)``.
+
+    Checked once here, on concrete and traced loops alike: ``x0`` shape, the plant's ``output`` and
+    ``dynamics`` shapes, the controller output shape (blaming the reference when its size differs
+    from the plant's outputs) and the disturbed plant input.  On concrete values only: ``x0`` and the
+    signal parameters finite (:func:`~jaxsim.core.signals.check_signal`); traced NaN propagates.
+    """
     sensor_period = None if loop.sensor is None else loop.sensor.period
     n_ticks, substeps, sensor_every = timing.resolve(sensor_period)
     x0 = jnp.asarray(x0)
@@ -172,11 +221,16 @@ def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | N
             f"got {tuple(x0.shape)}"
         )
     check_finite("x0", x0)
+    check_signal("reference", loop.reference)
+    check_signal("disturbance", loop.disturbance)
     key = jax.random.PRNGKey(0) if key is None else key
     dtype = jnp.result_type(x0, float)
+    x0 = x0.astype(dtype)  # an integer x0 would make the scan carry change type
     ts = jnp.asarray(timing.ts, dtype)
     h = jnp.asarray(timing.dt, dtype)
+    t0 = jnp.asarray(0.0, dtype)
     plant, ctrl, est = loop.plant, loop.controller, loop.estimator
+    _check_plant(plant, x0, t0)
 
     def measure(x: jax.Array, t: jax.Array, k: jax.Array) -> jax.Array:
         y = plant.h(x)
@@ -207,8 +261,8 @@ def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | N
                    None if est is None else seen)
         return _Carry(c.k + 1, x_next, y_held, ctrl_state, est_state), rec
 
-    y0 = measure(x0, jnp.asarray(0.0, dtype), jnp.asarray(0))
-    r0 = loop.reference(jnp.asarray(0.0, dtype))
+    y0 = measure(x0, t0, jnp.asarray(0))
+    r0 = loop.reference(t0)
     carry = _Carry(
         k=jnp.asarray(0),
         x=x0,
@@ -216,6 +270,9 @@ def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | N
         ctrl=ctrl.init(ctrl.params, r0, y0),
         est=None if est is None else est.init(est.params, y0),
     )
+    seen0 = y0 if est is None else est.read(est.params, carry.est)
+    u0 = jax.eval_shape(lambda c: ctrl.step(ctrl.params, c, r0, seen0, ts)[1], carry.ctrl)
+    _check_input_shapes(loop, u0, r0, t0)
     return tick, carry, n_ticks
 
 
@@ -232,6 +289,17 @@ def simulate(
     ``key`` seeds sensor noise (required only if the sensor is noisy; defaults to ``PRNGKey(0)``).
     For large batches where only a scalar cost is needed, :func:`fold` avoids storing the
     trajectory (several times faster: the stacked outputs dominate memory traffic).
+
+    An integer ``x0`` is cast to float (float64; a float32 ``x0`` stays float32).
+
+    Raises:
+        ValueError: before anything runs, naming the culprit: ``t_final/dt`` above
+            :data:`MAX_STEPS`; ``x0`` not ``(n_states,)``; the plant's ``output``/``dynamics`` not
+            returning ``(n_outputs,)``/``(n_states,)``; a ``reference`` whose size makes the
+            controller's ``u`` differ from ``(n_inputs,)`` (or such a controller); a
+            ``disturbance`` that changes the plant input's shape.  These shape checks hold under
+            ``jit`` too.  On concrete values also: a non-finite ``x0`` or signal parameter
+            (``reference.amplitude: must be finite``); under ``jit`` those give a NaN trajectory.
     """
     tick, carry, n_ticks = _prepare(loop, x0, timing, key, solver)
     save_every = int(timing.save_every)
@@ -258,6 +326,7 @@ def fold(
 
     Same simulation as :func:`simulate` (``timing.save_every`` is ignored), but nothing is stored
     per tick: use it for running costs such as ``acc + tick.t * |tick.r − tick.y| * Ts`` (ITAE).
+    Inputs are checked (and an integer ``x0`` cast) as in :func:`simulate`.
     """
     tick, carry, n_ticks = _prepare(loop, x0, timing, key, solver)
 

@@ -4,6 +4,15 @@ Every signal is a pytree dataclass whose numbers (amplitudes, slopes, times) are
 batch of signals is one ``vmap`` away.  Calling a signal at a scalar time ``t`` returns an array of
 shape ``(k,)`` (a scalar amplitude gives ``k = 1``).  Time is in the model's unit (seconds for the
 seed papers).
+
+Parameters are checked by :func:`check_signal` (called by :func:`sample` and by the rollout's
+``simulate``/``fold`` for the reference and the disturbance), not when a signal is built: signals
+are pytrees, rebuilt on every unflatten — as gradients, or as an optimiser's zero-filled state,
+where a zero ``period`` is legitimate.  It raises ``ValueError`` naming the field
+(``reference.amplitude: must be finite``) for a NaN/inf parameter, a ``Square`` period ≤ 0 or duty
+outside ``[0, 1]``, and ``Piecewise`` times out of order.  Inside ``jit``/``vmap`` (traced
+parameters) nothing can be raised: a NaN parameter gives NaN values, an infinite amplitude gives
+±inf after its switching time and NaN before it (``inf · 0``).
 """
 
 from __future__ import annotations
@@ -12,8 +21,10 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from jaxsim.core.pytree import pytree_dataclass, static_field
+from jaxsim.core.validation import check_finite, check_positive, is_concrete
 
 
 def _vec(x: Any) -> jax.Array:
@@ -84,6 +95,12 @@ class Square:
     offset: Any = 0.0
     t0: Any = 0.0
 
+    def validate(self, name: str) -> None:
+        """Period > 0 and duty in ``[0, 1]`` (see :func:`check_signal`)."""
+        check_positive(f"{name}.period", self.period)
+        if is_concrete(self.duty) and np.any((np.asarray(self.duty) < 0) | (np.asarray(self.duty) > 1)):
+            raise ValueError(f"{name}.duty: must lie in [0, 1], got {np.asarray(self.duty)!r}")
+
     def __call__(self, t: jax.Array) -> jax.Array:
         phase = jnp.mod(t - self.t0, self.period) / self.period
         high = jnp.where(phase < self.duty, 1.0, -1.0)
@@ -102,6 +119,15 @@ class Piecewise:
     values: Any
     linear: bool = static_field(default=False)
 
+    def validate(self, name: str) -> None:
+        """``times`` 1-D and non-decreasing, one row of ``values`` per time (see :func:`check_signal`)."""
+        shape_t, shape_v = np.shape(self.times), np.shape(self.values)
+        if len(shape_t) != 1 or len(shape_v) not in (1, 2) or shape_v[0] != shape_t[0]:
+            raise ValueError(f"{name}.values: expected shape ({shape_t[0] if shape_t else 'p'},) or "
+                             f"(p, k) to match times of shape {shape_t}, got {shape_v}")
+        if is_concrete(self.times) and np.any(np.diff(np.asarray(self.times)) < 0):
+            raise ValueError(f"{name}.times: must be non-decreasing, got {np.asarray(self.times)!r}")
+
     def __call__(self, t: jax.Array) -> jax.Array:
         times = jnp.asarray(self.times)
         values = jnp.asarray(self.values)
@@ -118,6 +144,11 @@ class Sum:
 
     terms: tuple
 
+    def validate(self, name: str) -> None:
+        """Each term's own checks (see :func:`check_signal`)."""
+        for i, term in enumerate(self.terms):
+            _validate(f"{name}.terms[{i}]", term)
+
     def __call__(self, t: jax.Array) -> jax.Array:
         out = self.terms[0](t)
         for s in self.terms[1:]:
@@ -125,6 +156,28 @@ class Sum:
         return out
 
 
+def _validate(name: str, signal: Any) -> None:
+    validate = getattr(signal, "validate", None)
+    if callable(validate):
+        validate(name)
+
+
+def check_signal(name: str, signal: Any) -> None:
+    """Raise ``ValueError`` naming ``name.field`` for a signal parameter that is NaN/inf, or that the
+    signal's own ``validate(name)`` rejects (``Square.period ≤ 0``, ``Piecewise.times`` unordered).
+
+    Any pytree signal works (a user's own class too: every float leaf must be finite; it may add a
+    ``validate(name)`` method).  Traced leaves (inside ``jit``/``vmap``) are skipped.
+    """
+    for path, leaf in jax.tree_util.tree_flatten_with_path(signal)[0]:
+        check_finite(f"{name}{jax.tree_util.keystr(path)}", leaf)
+    _validate(name, signal)
+
+
 def sample(signal: Any, ts: jax.Array) -> jax.Array:
-    """Evaluate ``signal`` on a time grid ``ts`` of shape ``(N,)``; returns ``(N, k)``."""
+    """Evaluate ``signal`` on a time grid ``ts`` of shape ``(N,)``; returns ``(N, k)``.
+
+    Raises ``ValueError`` for bad signal parameters (:func:`check_signal`, named ``signal.…``).
+    """
+    check_signal("signal", signal)
     return jax.vmap(signal)(jnp.asarray(ts))

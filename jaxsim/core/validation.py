@@ -9,7 +9,7 @@ under transformations.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, Callable
 
 import jax
 import numpy as np
@@ -20,13 +20,33 @@ def is_concrete(x: Any) -> bool:
     return not any(isinstance(leaf, jax.core.Tracer) for leaf in jax.tree_util.tree_leaves(x))
 
 
+def _shape_matches(actual: tuple[int, ...], shape: tuple[int | None, ...]) -> bool:
+    return len(actual) == len(shape) and all(s is None or s == a for s, a in zip(shape, actual))
+
+
 def check_shape(name: str, x: Any, shape: tuple[int | None, ...]) -> None:
     """Require ``x.shape`` to match ``shape`` (``None`` matches any length)."""
     actual = tuple(np.shape(x))
-    ok = len(actual) == len(shape) and all(s is None or s == a for s, a in zip(shape, actual))
-    if not ok:
-        want = "(" + ", ".join("any" if s is None else str(s) for s in shape) + ")"
+    if not _shape_matches(actual, shape):
+        dims = ["any" if s is None else str(s) for s in shape]
+        want = "(" + ", ".join(dims) + ("," if len(dims) == 1 else "") + ")"
         raise ValueError(f"{name}: expected shape {want}, got {actual}")
+
+
+def check_returns_shape(name: str, fn: Callable[..., Any], *args: Any,
+                        shape: tuple[int | None, ...]) -> jax.ShapeDtypeStruct:
+    """Require ``fn(*args)`` to return one array of shape ``shape``; return its shape and dtype.
+
+    ``fn`` is traced abstractly (``jax.eval_shape``: nothing is computed), so this is cheap and works
+    on tracers too.  ``name`` says which function is at fault, e.g. ``"plant 'trms': output(params, x)"``;
+    the error reads ``"{name} returns shape (2,), expected (1,)"``.
+    """
+    out = jax.eval_shape(fn, *args)
+    if not isinstance(out, jax.ShapeDtypeStruct):
+        raise ValueError(f"{name} returns {type(out).__name__}, expected one array of shape {shape}")
+    if not _shape_matches(tuple(out.shape), shape):
+        raise ValueError(f"{name} returns shape {tuple(out.shape)}, expected {tuple(shape)}")
+    return out
 
 
 def check_finite(name: str, x: Any) -> None:

@@ -9,7 +9,9 @@ their broadcast shape.
 * :class:`Uniform` on ``[low, high)``;
 * :class:`LogNormal` ``exp(N(mu, sigma²))`` — ``mu``/``sigma`` are those of ``log X`` (NumPy's
   ``lognormal(mean, sigma)``, SciPy's ``lognorm(s=sigma, scale=exp(mu))``);
-* :class:`TruncatedNormal` ``N(mean, std²)`` conditioned on ``[low, high]``;
+* :class:`TruncatedNormal` ``N(mean, std²)`` conditioned on ``[low, high]`` — sampled by inverting
+  the normal's log-survival function, so windows far out in a tail (10σ, 50σ, …) are sampled
+  correctly (see :func:`standard_truncated_normal`);
 * :class:`Deviation` — the seed papers' "nominal ± Δ": uniform on ``[nominal − Δ, nominal + Δ]``
   (``relative=False``) or on ``nominal·[1 − Δ, 1 + Δ]`` (``relative=True``, Δ a fraction: 0.2 = ±20 %).
 
@@ -24,12 +26,14 @@ parameter never changes the draws of the others.
 
 from __future__ import annotations
 
+import math
 import zlib
 from typing import Any
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax.scipy.special import log_ndtr, ndtri
 
 from jaxsim.core.pytree import pytree_dataclass, static_field
 from jaxsim.core.validation import is_concrete
@@ -116,9 +120,101 @@ class LogNormal(Distribution):
         return jnp.exp(self.mu + self.sigma * jax.random.normal(key, self.shape, _dtype()))
 
 
+_NEWTON_STEPS = 3
+_LOG_2PI = math.log(2 * math.pi)  # Python floats keep float32 arithmetic in float32
+
+
+def _log_pdf(x: jax.Array) -> jax.Array:
+    return -0.5 * x * x - 0.5 * _LOG_2PI
+
+
+def inverse_log_survival(log_p: jax.Array) -> jax.Array:
+    """The standard normal quantile ``x`` with ``log P(Z > x) = log_p`` (``log_p ≤ 0``).
+
+    For ``x < 0`` (``log_p > log ½``): ``x = Φ⁻¹(−expm1(log_p))``, exact to rounding.  For ``x ≥ 0``:
+    a first guess ``−Φ⁻¹(e^{log_p})`` while ``e^{log_p}`` is a normal float, else the tail asymptote
+    ``log P(Z > x) ≈ −x²/2 − log(x √(2π))``; then Newton steps on ``log P(Z > x)`` (concave in
+    ``x``, so they converge from any start), which keep the answer accurate where ``e^{log_p}``
+    underflows (beyond ≈ 37σ in float64).
+    """
+    log_p = jnp.asarray(log_p)
+    log_half = -math.log(2.0)
+    lower = log_p > log_half
+    x_lower = ndtri(-jnp.expm1(jnp.minimum(log_p, 0.0)))
+    floor = float(np.log(jnp.finfo(log_p.dtype).tiny)) + 1.0
+    lp = jnp.minimum(log_p, log_half)  # upper branch only; keeps its arithmetic finite
+    y = -2.0 * lp
+    x_asym = jnp.sqrt(y)
+    for _ in range(2):
+        x_asym = jnp.sqrt(y - _LOG_2PI - 2.0 * jnp.log(x_asym))
+    x = jnp.where(lp > floor, -ndtri(jnp.exp(jnp.maximum(lp, floor))), x_asym)
+    x = jnp.maximum(x, 0.0)
+    for _ in range(_NEWTON_STEPS):
+        log_sf = log_ndtr(-x)
+        x = x + (log_sf - lp) * jnp.exp(log_sf - _log_pdf(x))  # d log S/dx = −φ/S
+    return jnp.where(lower, x_lower, x)
+
+
+def _log_diff(log_big: jax.Array, log_small: jax.Array) -> jax.Array:
+    """``log(e^{log_big} − e^{log_small})`` for ``log_small ≤ log_big``."""
+    return log_big + jnp.log(-jnp.expm1(log_small - log_big))
+
+
+@jax.custom_jvp
+def _truncated_by_survival(u: jax.Array, a: jax.Array, b: jax.Array) -> jax.Array:
+    """``x`` in ``[a, b]`` with ``(S(a) − S(x)) / (S(a) − S(b)) = u``, ``S = 1 − Φ`` (log space)."""
+    log_sa, log_sb = log_ndtr(-a), log_ndtr(-b)
+    log_p = log_sa + jnp.log1p(u * jnp.expm1(log_sb - log_sa))
+    return jnp.clip(inverse_log_survival(log_p), a, b)
+
+
+@_truncated_by_survival.defjvp
+def _truncated_by_survival_jvp(primals, tangents):
+    # Implicit differentiation of (S(a) − S(x)) / (S(a) − S(b)) = u at fixed u (not through Newton):
+    # ∂x/∂a = φ(a)/φ(x) · (S(x) − S(b))/(S(a) − S(b)),  ∂x/∂b = φ(b)/φ(x) · (S(a) − S(x))/(S(a) − S(b)).
+    u, a, b = primals
+    _, a_dot, b_dot = tangents
+    x = _truncated_by_survival(u, a, b)
+    log_sa, log_sb, log_sx = log_ndtr(-a), log_ndtr(-b), log_ndtr(-x)
+    log_mass = _log_diff(log_sa, log_sb)
+    dx_da = jnp.exp(_log_pdf(a) - _log_pdf(x) + _log_diff(log_sx, log_sb) - log_mass)
+    dx_db = jnp.exp(_log_pdf(b) - _log_pdf(x) + _log_diff(log_sa, log_sx) - log_mass)
+    return x, dx_da * a_dot + dx_db * b_dot
+
+
+def standard_truncated_normal(key: jax.Array, a: Any, b: Any, shape: tuple[int, ...], dtype: Any) -> jax.Array:
+    """Draws of ``N(0, 1)`` conditioned on ``[a, b]`` (``a < b``, either may be infinite), shape ``shape``.
+
+    Inverse-CDF sampling through the log-survival function ``log S = log(1 − Φ)``:
+    ``log S(x) = log S(a) + log(1 − u·(1 − S(b)/S(a)))`` with ``u ~ U[0, 1)``, inverted by
+    :func:`inverse_log_survival`.  Windows with ``a + b < 0`` are mirrored into the upper tail first,
+    so both tails are handled in the precise direction; no probability is formed outside log space,
+    hence a window 50σ out (``S ≈ 1e-545``) is sampled as accurately as one at the centre.
+    Derivatives in ``a`` and ``b`` are the implicit (reparametrisation) ones at fixed ``u``.
+    """
+    a = jnp.broadcast_to(jnp.asarray(a, dtype), shape)
+    b = jnp.broadcast_to(jnp.asarray(b, dtype), shape)
+    flip = (a + b) < 0  # NaN for (−inf, inf): False
+    u = jax.random.uniform(key, shape, dtype)
+    z = _truncated_by_survival(u, jnp.where(flip, -b, a), jnp.where(flip, -a, b))
+    return jnp.where(flip, -z, z)
+
+
+def _standardise(bound: Any, mean: Any, std: Any) -> jax.Array:
+    """``(bound − mean)/std``; an infinite bound stays infinite with a zero derivative (not ∞·0)."""
+    infinite = jnp.isinf(bound)
+    finite = jnp.where(infinite, 0.0, bound)  # so that reverse mode never forms 0·∞
+    return jnp.where(infinite, bound, (finite - mean) / std)
+
+
 @pytree_dataclass
 class TruncatedNormal(Distribution):
-    """``N(mean, std²)`` restricted to ``[low, high]`` (``low < high``; either may be ±inf)."""
+    """``N(mean, std²)`` restricted to ``[low, high]`` (``low < high``; either may be ±inf).
+
+    Sampled by :func:`standard_truncated_normal`: accurate for windows anywhere, however far out in
+    a tail (``jax.random.truncated_normal``, used before, returned ±1.8e308 for every draw of a
+    one-sided window beyond ≈ 8σ and the far bound for a two-sided one).
+    """
 
     mean: Any = 0.0
     std: Any = 1.0
@@ -135,9 +231,9 @@ class TruncatedNormal(Distribution):
                    f"greater than low={lo.tolist()!r}")
 
     def sample(self, key: jax.Array) -> jax.Array:
-        a = (self.low - self.mean) / self.std
-        b = (self.high - self.mean) / self.std
-        z = jax.random.truncated_normal(key, a, b, self.shape, _dtype())
+        a = _standardise(self.low, self.mean, self.std)
+        b = _standardise(self.high, self.mean, self.std)
+        z = standard_truncated_normal(key, a, b, self.shape, _dtype())
         return jnp.clip(self.mean + self.std * z, self.low, self.high)
 
 

@@ -121,6 +121,9 @@ def _check_design(design: Design, space: Any) -> None:
     if not isinstance(space, dict):
         raise ValueError("space: must be a dict of named parameters when a design sets parameters")
     for name in design.names:
+        if name not in space:  # it would be added to every draw, read by nobody: identical points
+            raise ValueError(f"design: parameter {name!r} is not in the space; the space's parameters: "
+                             f"{', '.join(sorted(map(str, space)))}")
         if is_distribution(space.get(name)):
             raise ValueError(f"{name}: is drawn from a distribution in space; a sweep cannot also set it")
 
@@ -349,7 +352,8 @@ def sweep(
         space: pytree (a dict when ``design`` sets parameters) of distributions and fixed values.
         design: points to visit (:func:`~jaxsim.montecarlo.designs.grid`, ``latin_hypercube``,
             ``sobol``, ``points``, ``single_point``); every point uses the same ``key`` (common
-            random numbers: differences between points are not blurred by sampling noise).
+            random numbers: differences between points are not blurred by sampling noise).  Each
+            design parameter must be a fixed (not random) entry of ``space``.
         n: runs per point, ``1 ≤ n < 2³²``.
         key: int seed or PRNG key.
         block_size: runs per block ``L`` — the unit of computation and of the merge; changing it

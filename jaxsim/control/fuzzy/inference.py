@@ -24,6 +24,10 @@ Evaluation of ``x`` (shape ``(n,)``):
 
 If no rule fires (``Σ w_r = 0``), Sugeno and Tsukamoto return 0 (simpful's convention), Mamdani the
 defuzzifier's fallback (the middle of the output grid).
+
+Inputs: ``x`` must have shape ``(n,)`` (``ValueError`` naming ``x`` otherwise, under ``jit`` too:
+the shape is static).  A NaN or infinite entry raises ``ValueError`` when ``x`` is concrete; inside
+``jit``/``vmap`` :func:`evaluate` returns NaN for it (it no longer falls back to "no rule fired").
 """
 
 from __future__ import annotations
@@ -39,7 +43,7 @@ from jaxsim.control.fuzzy.membership import Terms, terms as make_terms
 from jaxsim.control.fuzzy.norms import check_snorm, check_tnorm, snorm_reduce, tnorm_reduce
 from jaxsim.control.fuzzy.rules import RuleBase
 from jaxsim.core.pytree import pytree_dataclass, static_field
-from jaxsim.core.validation import check_finite, is_concrete
+from jaxsim.core.validation import check_finite, check_shape, is_concrete
 
 UNIMODAL_KINDS = ("triangular", "trapezoidal", "gaussian", "bell", "sigmoid")
 
@@ -108,6 +112,7 @@ class FuzzySystem:
 def firing_strengths(fis: FuzzySystem, x: Any) -> jax.Array:
     """Rule strengths ``w`` ``(R,)`` for the input ``x`` ``(n,)`` (weights included)."""
     x = jnp.asarray(x)
+    check_shape("x", x, (fis.n_inputs,))
     ant = fis.rules.antecedent_array()
     used = ant >= 0  # static: inputs a rule does not test are skipped
     mu_r = jnp.stack([var(x[i])[np.maximum(ant[:, i], 0)] for i, var in enumerate(fis.inputs)], axis=1)
@@ -158,8 +163,18 @@ def _tsukamoto_inverse(t: Terms, cons: np.ndarray, w: jax.Array) -> jax.Array:
 
 
 def evaluate(fis: FuzzySystem, x: Any) -> jax.Array:
-    """Crisp output (scalar) of ``fis`` for the input vector ``x`` ``(n,)``."""
+    """Crisp output (scalar) of ``fis`` for the input vector ``x`` ``(n,)``.
+
+    Raises ``ValueError`` naming ``x`` for a shape other than ``(n,)``, or (concrete ``x``) a NaN or
+    infinite entry.  Traced (``jit``/``vmap``): a non-finite entry gives a NaN output.
+    """
     x = jnp.asarray(x)
+    check_shape("x", x, (fis.n_inputs,))
+    check_finite("x", x)
+    return jnp.where(jnp.all(jnp.isfinite(x)), _crisp_output(fis, x), jnp.nan)
+
+
+def _crisp_output(fis: FuzzySystem, x: jax.Array) -> jax.Array:
     out = fis.output
     if isinstance(out, MamdaniOutput):
         if out.defuzzifier == "centroid" and out.implication == "min" and out.terms.kind in UNIMODAL_KINDS:
