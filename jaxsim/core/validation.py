@@ -71,6 +71,61 @@ def check_positive(name: str, x: Any, *, allow_zero: bool = False) -> None:
         raise ValueError(f"{name}: must be {rel}, got {arr!r}")
 
 
+def check_real(name: str, x: Any) -> None:
+    """Require a real numeric dtype (bool, integer or float; not complex).  Dtypes are static, so
+    this check also runs on tracers."""
+    dtype = np.dtype(x.dtype) if hasattr(x, "dtype") else np.asarray(x).dtype
+    if dtype.kind not in "biuf":
+        raise ValueError(f"{name}: must be real-valued, got dtype {dtype}")
+
+
+def _static_real(name: str, x: Any, what: str) -> float:
+    """``x`` as a ``float`` if it is a concrete real scalar (not a bool); else ``ValueError`` saying
+    it must be ``what``."""
+    if not is_concrete(x):
+        raise ValueError(f"{name}: must be {what} (static configuration), got a traced value")
+    if isinstance(x, (bool, np.bool_)) or np.ndim(x) != 0 or np.asarray(x).dtype.kind not in "iuf":
+        raise ValueError(f"{name}: must be {what}, got {x!r}")
+    return float(x)
+
+
+def check_positive_scalar(name: str, x: Any) -> float:
+    """Require a real, finite, positive Python or NumPy scalar (not a bool); return it as ``float``.
+    For static configuration (a jit-static threshold), so ``x`` must be concrete."""
+    value = _static_real(name, x, "a real positive scalar")
+    if not math.isfinite(value) or value <= 0.0:
+        raise ValueError(f"{name}: must be positive and finite, got {x!r}")
+    return value
+
+
+def check_positive_int(name: str, x: Any) -> int:
+    """Require a positive integer (a Python or NumPy integer, or an integral float such as ``4.0``;
+    not a bool); return it as ``int``.  For static sizes, so ``x`` must be concrete."""
+    value = _static_real(name, x, "a positive integer")
+    if not math.isfinite(value) or value != math.floor(value) or value < 1:
+        raise ValueError(f"{name}: must be a positive integer, got {x!r}")
+    return int(value)
+
+
+def check_probabilities(name: str, p: Any) -> None:
+    """Require finite, non-negative entries summing to 1 along the last axis (a probability vector,
+    or a row-stochastic matrix), to a tolerance of ``max(1e-10, 16 ε)`` for the input's float type.
+
+    Shape-agnostic; values only when concrete.
+    """
+    check_finite(name, p)
+    if not is_concrete(p):
+        return
+    raw = np.asarray(p)
+    eps = np.finfo(raw.dtype).eps if raw.dtype.kind == "f" else np.finfo(float).eps
+    arr = raw.astype(float)
+    if np.any(arr < 0):
+        raise ValueError(f"{name}: probabilities must be non-negative, got {raw!r}")
+    sums = arr.sum(axis=-1)
+    if not np.allclose(sums, 1.0, rtol=0.0, atol=max(1e-10, 16 * eps)):
+        raise ValueError(f"{name}: probabilities must sum to 1 along the last axis, got sums {sums.tolist()}")
+
+
 def check_period_multiple(name: str, period: float, base: float, base_name: str) -> int:
     """Require ``period`` to be a positive integer multiple of ``base``; return the ratio."""
     check_positive(name, period)
@@ -92,9 +147,12 @@ def check_square(name: str, m: Any) -> None:
         raise ValueError(f"{name}: expected a square matrix, got shape {tuple(shape)}")
 
 
-def check_covariance(name: str, m: Any, n: int | None = None, *, rtol: float = 1e-8, definite: bool = False) -> None:
+def check_covariance(
+    name: str, m: Any, n: int | None = None, *, rtol: float = 1e-8, definite: bool = False, purpose: str = ""
+) -> None:
     """Require a symmetric positive semi-definite ``(n, n)`` matrix (or a stack ``(..., n, n)``);
-    with ``definite``, positive definite (smallest eigenvalue > ``rtol·max|λ|``).
+    with ``definite``, positive definite (smallest eigenvalue > ``rtol·max|λ|``); ``purpose`` says
+    why in the message (``"must be positive definite for <purpose>"``).
 
     Shape is always checked; symmetry (to ``rtol`` of the largest entry) and the sign of the
     smallest eigenvalue (≥ ``−rtol·max|λ|``) only when ``m`` is concrete.
@@ -114,6 +172,7 @@ def check_covariance(name: str, m: Any, n: int | None = None, *, rtol: float = 1
     eig = np.linalg.eigvalsh(arr)
     lo, tol = float(np.min(eig)), rtol * max(float(np.max(np.abs(eig))), np.finfo(float).tiny)
     if definite and lo <= tol:
-        raise ValueError(f"{name}: must be positive definite (smallest eigenvalue {lo:.6g})")
+        why = f" for {purpose}" if purpose else ""
+        raise ValueError(f"{name}: must be positive definite{why} (smallest eigenvalue {lo:.6g})")
     if lo < -tol:
         raise ValueError(f"{name}: must be positive semi-definite (smallest eigenvalue {lo:.3g})")

@@ -23,7 +23,7 @@ from jaxsim.estimation.ekf import ekf_predict, ekf_update
 from jaxsim.estimation.lgssm import LinearGaussianSSM, validate_model
 from jaxsim.estimation.nonlinear import NonlinearSSM, validate_nonlinear
 from jaxsim.estimation.types import GaussianState
-from jaxsim.estimation.ukf import MerweScaledSigmaPoints, ukf_predict, ukf_update
+from jaxsim.estimation.ukf import MerweScaledSigmaPoints, check_merwe, ukf_predict, ukf_update
 
 READS = ("mean", "output")
 
@@ -109,10 +109,13 @@ def _ukf_upd(params, state, y):
 def ukf_estimator(
     model: NonlinearSSM, *, alpha: float = 1.0, beta: float = 2.0, kappa: float = 0.0, read: str = "mean"
 ) -> Estimator:
-    """A UKF (Merwe scaled sigma points) as an :class:`Estimator`."""
+    """A UKF (Merwe scaled sigma points; admissible ranges in
+    :class:`~jaxsim.estimation.ukf.MerweScaledSigmaPoints`) as an :class:`Estimator`."""
     validate_nonlinear(model)
     _check_read(read)
-    return Estimator((model, MerweScaledSigmaPoints(alpha, beta, kappa)), _init, _ukf_pred, _ukf_upd,
+    scheme = MerweScaledSigmaPoints(alpha, beta, kappa)
+    check_merwe(scheme, model.n_states)
+    return Estimator((model, scheme), _init, _ukf_pred, _ukf_upd,
                      _read_mean if read == "mean" else _nl_read_output, name="ukf")
 
 

@@ -14,9 +14,9 @@ import jax
 import jax.numpy as jnp
 
 from jaxsim.estimation import kalman
-from jaxsim.estimation.filtering import scan_filter
+from jaxsim.estimation.filtering import check_gate, scan_filter
 from jaxsim.estimation.lgssm import prepare_measurements
-from jaxsim.estimation.nonlinear import NonlinearSSM, validate_nonlinear
+from jaxsim.estimation.nonlinear import NonlinearSSM, common_float_nonlinear, validate_nonlinear
 from jaxsim.estimation.types import FilterResult, GaussianState, Innovation
 
 
@@ -52,10 +52,12 @@ def extended_kalman_filter(
     form: str = "joseph",
     gate: float | None = None,
 ) -> FilterResult:
-    """Scanned EKF over ``y (T, p)``; arguments as :func:`~jaxsim.estimation.lgssm.kalman_filter`."""
+    """Scanned EKF over ``y (T, p)``; arguments (including the cast to one float dtype) as
+    :func:`~jaxsim.estimation.lgssm.kalman_filter`."""
+    gate = check_gate(gate)
     validate_nonlinear(model)
+    model, y, u, _ = common_float_nonlinear(model, y, u)
     y, m = prepare_measurements(y, model.n_outputs, mask, missing)
-    u = None if u is None else jnp.asarray(u)
     return _ekf_scan(model, y, m, u, form, gate)
 
 

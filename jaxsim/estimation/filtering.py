@@ -4,6 +4,8 @@ A filter supplies ``update(state, y_t, mask_t, params_t) -> (state, Innovation)`
 ``predict(state, u_t, params_t) -> state``; :func:`scan_filter` runs update-then-predict over the
 measurements in one ``lax.scan`` (the initial belief is the prior of the first step), applies the
 optional χ² gate and collects a :class:`~jaxsim.estimation.types.FilterResult`.
+
+Every public filter with a ``gate`` argument checks it with :func:`check_gate` before tracing.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from typing import Any, Callable
 import jax
 import jax.numpy as jnp
 
+from jaxsim.core.validation import check_positive_scalar
 from jaxsim.estimation.types import FilterResult, Innovation, SqrtGaussianState
 
 UpdateFn = Callable[[Any, jax.Array, jax.Array, Any], tuple[Any, Innovation]]
@@ -23,6 +26,12 @@ def _cov(state: Any) -> jax.Array:
     if isinstance(state, SqrtGaussianState):
         return state.chol @ jnp.swapaxes(state.chol, -1, -2)
     return state.cov
+
+
+def check_gate(gate: Any) -> float | None:
+    """``None`` (no gate) or a positive, finite χ² threshold on the NIS, returned as ``float`` (a jit
+    static argument).  ``gate ≤ 0`` or NaN would reject every update and ``inf`` none, silently."""
+    return None if gate is None else check_positive_scalar("gate", gate)
 
 
 def scan_filter(

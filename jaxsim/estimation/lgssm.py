@@ -13,6 +13,11 @@ available) and/or ``missing="nan"`` (NaN entries of ``y`` are treated as missing
 
 χ² gating: ``gate=threshold`` rejects (skips) an update whose NIS exceeds the threshold; the
 rejected steps show as ``accepted = False`` (see :mod:`jaxsim.estimation.gating` for thresholds).
+The threshold is a jit-static number, always checked: positive and finite, else ``ValueError``.
+
+Dtypes: the model, ``y`` and ``u`` are cast to one float dtype at the boundary
+(:func:`jaxsim.precision.to_common_float`), so integer ``m0``/``P0`` and a float32 model with
+float64 measurements run (in float64); an all-float32 call stays float32.
 """
 
 from __future__ import annotations
@@ -27,8 +32,9 @@ import numpy as np
 from jaxsim.core.pytree import pytree_dataclass
 from jaxsim.core.validation import check_covariance, check_finite, is_concrete
 from jaxsim.estimation import kalman
-from jaxsim.estimation.filtering import scan_filter
+from jaxsim.estimation.filtering import check_gate, scan_filter
 from jaxsim.estimation.types import FilterResult, GaussianState, SqrtGaussianState
+from jaxsim.precision import to_common_float
 
 FORMS = ("joseph", "standard", "sqrt")
 MISSING_POLICIES = ("error", "nan")
@@ -165,6 +171,13 @@ def at(model: LinearGaussianSSM, tv: dict[str, jax.Array], name: str) -> jax.Arr
     return tv[name] if name in tv else getattr(model, name)
 
 
+def common_float_model(model: LinearGaussianSSM, y: Any, u: Any = None) -> tuple[LinearGaussianSSM, jax.Array, Any]:
+    """``model``, ``y`` and ``u`` (``None`` allowed) as arrays of one float dtype (see
+    :func:`jaxsim.precision.to_common_float`)."""
+    (model, y, u), _ = to_common_float((model, jnp.asarray(y), None if u is None else jnp.asarray(u)))
+    return model, y, u
+
+
 def cholesky_psd(m: jax.Array) -> jax.Array:
     """Cholesky factor of a PSD matrix; tolerates a singular ``Q`` via an eigen-factor."""
     w, v = jnp.linalg.eigh(kalman.symmetrize(m))
@@ -190,14 +203,20 @@ def kalman_filter(
         mask: ``(T,)`` or ``(T, p)`` booleans, ``True`` where a measurement is available.
         missing: ``"error"`` (NaN in an unmasked ``y`` → ``ValueError``) or ``"nan"`` (NaN = missing).
         form: ``"joseph"``, ``"standard"`` or ``"sqrt"`` (Cholesky factors propagated by QR).
-        gate: optional χ² threshold on the NIS; an update whose NIS exceeds it is skipped.
+        gate: optional χ² threshold on the NIS (positive, finite); an update whose NIS exceeds it
+            is skipped.
+
+    The model, ``y`` and ``u`` are cast to one float dtype first (:func:`jaxsim.precision.to_common_float`:
+    integer ``m0``/``P0`` become float, a float32 model meets float64 ``y`` in float64).
 
     Returns:
         :class:`FilterResult` with filtered and predicted moments, innovations and log-likelihood.
     """
     if form not in FORMS:
         raise ValueError(f"form: expected one of {FORMS}, got {form!r}")
+    gate = check_gate(gate)
     validate_model(model, n_steps=int(np.shape(y)[0]) if np.ndim(y) >= 1 else None)
+    model, y, u = common_float_model(model, y, u)
     y, m = prepare_measurements(y, model.n_outputs, mask, missing)
     u = prepare_inputs(u, y.shape[0], model)
     return _scan_filter(model, y, m, u, form, gate)

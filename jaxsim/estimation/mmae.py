@@ -25,6 +25,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxsim.core.validation import check_probabilities
 from jaxsim.estimation.lgssm import LinearGaussianSSM, kalman_filter
 from jaxsim.estimation.types import FilterResult
 
@@ -55,11 +56,13 @@ def bank_filter(
     missing: str = "error",
     form: str = "joseph",
 ) -> BankResult:
-    """Run one Kalman filter per hypothesis (fields of ``models`` stacked on axis 0) over ``y (T, p)``."""
+    """Run one Kalman filter per hypothesis (fields of ``models`` stacked on axis 0) over ``y (T, p)``;
+    ``prior (M,)`` probabilities (non-negative, sum 1; default uniform)."""
     n_models = int(np.shape(models.m0)[0])
     prior = jnp.full((n_models,), 1.0 / n_models) if prior is None else jnp.asarray(prior)
     if prior.shape != (n_models,):
         raise ValueError(f"prior: expected shape ({n_models},), got {tuple(prior.shape)}")
+    check_probabilities("prior", prior)
     run = jax.vmap(lambda mdl: kalman_filter(mdl, y, u, mask=mask, missing=missing, form=form))
     res = run(models)
     log_probs = bank_posterior(res.log_likelihoods, jnp.log(prior))

@@ -13,8 +13,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxsim.core.pytree import pytree_dataclass, static_field
+from jaxsim.core.pytree import pytree_dataclass, replace, static_field
 from jaxsim.core.validation import check_covariance, check_finite
+from jaxsim.precision import to_common_float
 
 
 @pytree_dataclass
@@ -74,3 +75,14 @@ def validate_nonlinear(model: NonlinearSSM) -> None:
     hx = jax.eval_shape(lambda z: model.h(z), x)
     if hx.shape != (model.n_outputs,):
         raise ValueError(f"observation: must return shape ({model.n_outputs},) to match R, returned {hx.shape}")
+
+
+def common_float_nonlinear(
+    model: NonlinearSSM, y: Any, u: Any = None, extra: Any = None
+) -> tuple[NonlinearSSM, jax.Array, Any, Any]:
+    """``model`` (``Q, R, m0, P0`` and the float leaves of ``params``), ``y``, ``u`` and the float
+    leaves of ``extra`` (a sigma-point scheme, say) in one float dtype
+    (:func:`jaxsim.precision.to_common_float`); returns ``(model, y, u, extra)``."""
+    data = (model.Q, model.R, model.m0, model.P0, jnp.asarray(y), None if u is None else jnp.asarray(u))
+    (Q, R, m0, P0, y, u), (params, extra) = to_common_float(data, (model.params, extra))
+    return replace(model, params=params, Q=Q, R=R, m0=m0, P0=P0), y, u, extra

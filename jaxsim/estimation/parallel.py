@@ -27,6 +27,7 @@ from jaxsim.estimation import kalman
 from jaxsim.estimation.lgssm import (
     LinearGaussianSSM,
     at,
+    common_float_model,
     is_time_varying,
     prepare_inputs,
     prepare_measurements,
@@ -103,11 +104,17 @@ _filter_operator = jax.vmap(_combine_filter)
 def parallel_kalman_filter(
     model: LinearGaussianSSM, y: Any, u: Any = None, *, mask: Any = None, missing: str = "error"
 ) -> FilterResult:
-    """Kalman filter by associative scan; same results as the serial ``kalman_filter``."""
+    """Kalman filter by associative scan; same results (and the same cast to one float dtype) as the
+    serial ``kalman_filter``."""
+    return _parallel_filter(*_prepare(model, y, u, mask, missing))
+
+
+def _prepare(model: LinearGaussianSSM, y: Any, u: Any, mask: Any, missing: str):
+    """Validated ``(model, y, mask, u)`` in one float dtype, as the serial filter prepares them."""
     validate_model(model, n_steps=int(jnp.shape(y)[0]) if jnp.ndim(y) >= 1 else None)
+    model, y, u = common_float_model(model, y, u)
     y, m = prepare_measurements(y, model.n_outputs, mask, missing)
-    u = prepare_inputs(u, y.shape[0], model)
-    return _parallel_filter(model, y, m, u)
+    return model, y, m, prepare_inputs(u, y.shape[0], model)
 
 
 @jax.jit
@@ -148,8 +155,8 @@ def parallel_rts_smoother(
     model: LinearGaussianSSM, y: Any, u: Any = None, *, mask: Any = None, missing: str = "error"
 ) -> SmootherResult:
     """RTS smoother by associative scan over the parallel filter; same results as ``rts_smoother``."""
-    filtered = parallel_kalman_filter(model, y, u, mask=mask, missing=missing)
-    return _parallel_smooth(model, filtered)
+    model, y, m, u = _prepare(model, y, u, mask, missing)
+    return _parallel_smooth(model, _parallel_filter(model, y, m, u))
 
 
 @jax.jit

@@ -17,11 +17,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxsim.core.pytree import pytree_dataclass, static_field
-from jaxsim.core.validation import check_positive, is_concrete
-from jaxsim.estimation.lgssm import LinearGaussianSSM, cholesky_psd, prepare_measurements
+from jaxsim.core.pytree import pytree_dataclass, replace, static_field
+from jaxsim.core.validation import check_covariance, check_positive_int, is_concrete
 from jaxsim.estimation.gating import mahalanobis_squared
 from jaxsim.estimation.kalman import LOG_2PI
+from jaxsim.estimation.lgssm import LinearGaussianSSM, cholesky_psd, prepare_measurements, validate_model
+from jaxsim.precision import to_common_float
 
 RESAMPLING = ("systematic", "stratified", "multinomial", None)
 
@@ -104,7 +105,8 @@ def resample(key: jax.Array, log_weights: jax.Array, method: str = "systematic")
 
 
 def pf_init(model: ParticleModel, key: jax.Array, n_particles: int) -> ParticleState:
-    """Draw ``n_particles`` from the prior with equal weights."""
+    """Draw ``n_particles`` (a positive integer) from the prior with equal weights."""
+    n_particles = check_positive_int("n_particles", n_particles)
     x = model.sample_initial(model.params, key, n_particles)
     return ParticleState(x, jnp.full((n_particles,), -jnp.log(n_particles), dtype=x.dtype))
 
@@ -161,18 +163,23 @@ def bootstrap_filter(
     mask: Any = None,
     missing: str = "error",
 ) -> ParticleResult:
-    """Scanned bootstrap particle filter over ``y (T, p)``; ``mask (T,)`` marks available steps."""
+    """Scanned bootstrap particle filter over ``y (T, p)``; ``mask (T,)`` marks available steps.
+
+    ``n_particles`` is a positive integer (a jit-static size).  ``y``, ``u`` and the float leaves of
+    ``model.params`` are cast to one float dtype (:func:`jaxsim.precision.to_common_float`).
+    """
     if resampling not in RESAMPLING:
         raise ValueError(f"resampling: expected one of {RESAMPLING}, got {resampling!r}")
-    check_positive("n_particles", n_particles)
+    n_particles = check_positive_int("n_particles", n_particles)
     if is_concrete(ess_threshold) and not 0.0 < float(ess_threshold) <= 1.0:
         raise ValueError(f"ess_threshold: must lie in (0, 1], got {ess_threshold!r}")
     y = jnp.asarray(y)
     if y.ndim != 2:
         raise ValueError(f"y: expected shape (T, p), got {tuple(y.shape)}")
+    (y, u), params = to_common_float((y, None if u is None else jnp.asarray(u)), model.params)
+    model = replace(model, params=params)
     y, m = prepare_measurements(y, y.shape[1], None if mask is None else jnp.asarray(mask), missing)
-    u = None if u is None else jnp.asarray(u)
-    return _run_particle_filter(model, key, y, jnp.all(m, axis=1), u, int(n_particles), resampling,
+    return _run_particle_filter(model, key, y, jnp.all(m, axis=1), u, n_particles, resampling,
                                 float(ess_threshold))
 
 
@@ -209,9 +216,17 @@ def _gaussian_loglik(p, y, x):
 
 
 def particle_model_from_lgssm(model: LinearGaussianSSM) -> ParticleModel:
-    """The bootstrap-filter model of a time-invariant linear-Gaussian model (for checks against the KF)."""
+    """The bootstrap-filter model of a time-invariant linear-Gaussian model (for checks against the KF).
+
+    ``R`` must be positive definite (the particle weights are Gaussian densities in ``R``; a singular
+    ``R`` makes them NaN); the model is validated and cast to one float dtype.  Under ``jit`` (a
+    traced ``R``) this is not checked and a singular ``R`` gives NaN estimates.
+    """
     if np.ndim(model.F) != 2 or np.ndim(model.Q) != 2 or np.ndim(model.H) != 2 or np.ndim(model.R) != 2:
         raise ValueError("model: time-varying matrices are not supported here")
+    validate_model(model)
+    check_covariance("R", model.R, definite=True, purpose="a particle filter's likelihood")
+    (model,), _ = to_common_float((model,))
     params = {"m0": model.m0, "L0": cholesky_psd(model.P0), "F": model.F, "LQ": cholesky_psd(model.Q),
               "H": model.H, "R": model.R, "logdet_R": jnp.linalg.slogdet(model.R)[1]}
     if model.B is not None:

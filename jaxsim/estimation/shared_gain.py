@@ -24,6 +24,7 @@ from jaxsim.estimation.lgssm import (
     prepare_measurements,
     step_params,
 )
+from jaxsim.precision import to_common_float
 
 
 class CovarianceSequence(NamedTuple):
@@ -84,10 +85,12 @@ class MeanFilterResult(NamedTuple):
 def mean_filter(
     model: LinearGaussianSSM, seq: CovarianceSequence, y: Any, u: Any = None, *, save_means: bool = True
 ) -> MeanFilterResult:
-    """Filter one measurement sequence ``y (T, p)`` with precomputed gains (vmap it over runs)."""
+    """Filter one measurement sequence ``y (T, p)`` with precomputed gains (vmap it over runs); the
+    model, ``seq``, ``y`` and ``u`` are cast to one float dtype as in ``kalman_filter``."""
     y = jnp.asarray(y)
     if y.ndim != 2 or y.shape != seq.mask.shape:
         raise ValueError(f"y: expected shape {tuple(seq.mask.shape)}, got {tuple(y.shape)}")
+    (model, seq, y, u), _ = to_common_float((model, seq, y, None if u is None else jnp.asarray(u)))
     u = prepare_inputs(u, y.shape[0], model)
     return _mean_scan(model, seq, jnp.where(seq.mask, y, 0.0), u, save_means)
 

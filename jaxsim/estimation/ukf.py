@@ -16,12 +16,14 @@ from typing import Any, Callable, Protocol
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from jaxsim.core.pytree import pytree_dataclass
+from jaxsim.core.validation import check_finite, check_positive, is_concrete
 from jaxsim.estimation import kalman
-from jaxsim.estimation.filtering import scan_filter
+from jaxsim.estimation.filtering import check_gate, scan_filter
 from jaxsim.estimation.lgssm import prepare_measurements
-from jaxsim.estimation.nonlinear import NonlinearSSM, validate_nonlinear
+from jaxsim.estimation.nonlinear import NonlinearSSM, common_float_nonlinear, validate_nonlinear
 from jaxsim.estimation.types import FilterResult, GaussianState, Innovation
 
 
@@ -30,30 +32,65 @@ class SigmaPointScheme(Protocol):
     def weights(self, n: int) -> tuple[jax.Array, jax.Array]: ...
 
 
+# n + λ below this multiple of n·ε leaves the weights 1/(n + λ) and W₀ = 1 − n/(n + λ) with fewer
+# than three significant digits in the weighted sums (ε of the filter's float type)
+_MIN_SPREAD_EPS = 1e3
+
+
 @pytree_dataclass
 class MerweScaledSigmaPoints:
-    """``2n + 1`` scaled sigma points; ``alpha``, ``beta``, ``kappa`` are array leaves (tunable)."""
+    """``2n + 1`` scaled sigma points; ``alpha``, ``beta``, ``kappa`` are array leaves (tunable).
+
+    Admissible values (checked by :func:`check_merwe` at every public filter boundary on concrete
+    values): ``alpha`` finite and ``> 0`` (usually ``1e-3 ≤ α ≤ 1``), ``beta`` finite (2 is optimal
+    for a Gaussian prior), ``kappa`` finite with ``n + κ > 0`` (usually ``0`` or ``3 − n``), and the
+    spread ``n + λ = α²(n + κ)`` above ``10³·ε·n`` (``ε`` the float type's epsilon: about
+    ``2·10⁻¹³ n`` in float64, ``10⁻⁴ n`` in float32).  Traced values are not checked: ``α = 0`` or
+    ``n + κ ≤ 0`` under ``jit``/``vmap`` give inf/NaN weights and NaN estimates.
+    """
 
     alpha: Any = 1.0
     beta: Any = 2.0
     kappa: Any = 0.0
 
-    def _lambda(self, n: int) -> jax.Array:
-        return jnp.asarray(self.alpha) ** 2 * (n + jnp.asarray(self.kappa)) - n
+    def _spread(self, n: int) -> jax.Array:
+        """``n + λ = α²(n + κ)``, formed without the cancellation of ``λ = α²(n + κ) − n``."""
+        return jnp.asarray(self.alpha) ** 2 * (n + jnp.asarray(self.kappa))
 
     def points(self, mean: jax.Array, cov: jax.Array) -> jax.Array:
         """Sigma points ``(2n + 1, n)``: ``[m, m + √(n+λ) Lᵢ…, m − √(n+λ) Lᵢ…]``."""
         n = mean.shape[0]
-        scaled = jnp.linalg.cholesky((n + self._lambda(n)) * kalman.symmetrize(cov))
+        scaled = jnp.linalg.cholesky(self._spread(n) * kalman.symmetrize(cov))
         return jnp.concatenate([mean[None], mean[None] + scaled.T, mean[None] - scaled.T], axis=0)
 
     def weights(self, n: int) -> tuple[jax.Array, jax.Array]:
         """Mean and covariance weights, each ``(2n + 1,)``."""
-        lam = self._lambda(n)
-        wi = jnp.full((2 * n,), 0.5 / (n + lam))
-        wm = jnp.concatenate([jnp.atleast_1d(lam / (n + lam)), wi])
-        w0c = lam / (n + lam) + 1.0 - jnp.asarray(self.alpha) ** 2 + jnp.asarray(self.beta)
-        return wm, jnp.concatenate([jnp.atleast_1d(w0c), wi])
+        c = self._spread(n)
+        wi = jnp.full((2 * n,), 0.5 / c)
+        w0 = 1.0 - n / c  # λ/(n + λ)
+        w0c = w0 + 1.0 - jnp.asarray(self.alpha) ** 2 + jnp.asarray(self.beta)
+        return jnp.concatenate([jnp.atleast_1d(w0), wi]), jnp.concatenate([jnp.atleast_1d(w0c), wi])
+
+
+def check_merwe(scheme: Any, n: int, dtype: Any = float) -> None:
+    """Check the parameters of a :class:`MerweScaledSigmaPoints` for state dimension ``n`` (other
+    schemes pass); ``ValueError`` naming ``alpha``, ``beta`` or ``kappa`` and the bad value."""
+    if not isinstance(scheme, MerweScaledSigmaPoints):
+        return
+    check_positive("alpha", scheme.alpha)
+    check_finite("beta", scheme.beta)
+    check_finite("kappa", scheme.kappa)
+    if not is_concrete((scheme.alpha, scheme.kappa)):
+        return
+    alpha, kappa = np.asarray(scheme.alpha, dtype=float), np.asarray(scheme.kappa, dtype=float)
+    floor = _MIN_SPREAD_EPS * np.finfo(dtype).eps * n
+    if np.any(n + kappa <= floor):
+        raise ValueError(f"kappa: n + kappa must be > 0 (the sigma-point spread n + λ = α²(n + κ)), "
+                         f"got kappa={scheme.kappa!r} for n={n}")
+    spread = alpha**2 * (n + kappa)
+    if np.any(spread <= floor):
+        raise ValueError(f"alpha: too small, n + λ = α²(n + κ) = {float(np.min(spread)):.3g} ≈ 0 for "
+                         f"n={n} (weights 1/(n + λ) blow up; need > {floor:.3g}), got alpha={scheme.alpha!r}")
 
 
 def unscented_transform(
@@ -103,10 +140,13 @@ def sigma_point_filter(
     missing: str = "error",
     gate: float | None = None,
 ) -> FilterResult:
-    """Scanned sigma-point filter with any ``scheme`` (arguments as the linear filter's)."""
+    """Scanned sigma-point filter with any ``scheme`` (arguments, including the cast to one float
+    dtype, as the linear filter's; the float leaves of ``scheme`` take part in the cast)."""
+    gate = check_gate(gate)
     validate_nonlinear(model)
+    model, y, u, scheme = common_float_nonlinear(model, y, u, scheme)
+    check_merwe(scheme, model.n_states, model.m0.dtype)
     y, m = prepare_measurements(y, model.n_outputs, mask, missing)
-    u = None if u is None else jnp.asarray(u)
     return _sigma_scan(model, scheme, y, m, u, gate)
 
 
@@ -133,6 +173,7 @@ def unscented_kalman_filter(
     missing: str = "error",
     gate: float | None = None,
 ) -> FilterResult:
-    """Scanned UKF with Merwe scaled sigma points ``(alpha, beta, kappa)``."""
+    """Scanned UKF with Merwe scaled sigma points ``(alpha, beta, kappa)`` (admissible ranges in
+    :class:`MerweScaledSigmaPoints`; bad concrete values raise ``ValueError``)."""
     scheme = MerweScaledSigmaPoints(alpha, beta, kappa)
     return sigma_point_filter(model, y, u, scheme=scheme, mask=mask, missing=missing, gate=gate)

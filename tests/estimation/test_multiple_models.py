@@ -102,7 +102,8 @@ def test_imm_with_nonlinear_members_on_linear_models_equals_linear_imm(kind):
 
 
 def test_imm_rejects_bad_transition_matrix():
-    with pytest.raises(ValueError, match="^transition: rows must be probabilities"):
+    with pytest.raises(ValueError, match=r"^transition: probabilities must sum to 1 along the last axis, "
+                                         r"got sums \[1.1, 1.0\]"):
         imm(_members(), np.array([[0.9, 0.2], [0.1, 0.9]]))
     with pytest.raises(ValueError, match="^transition: expected shape"):
         imm(_members(), np.eye(3))
