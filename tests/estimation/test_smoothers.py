@@ -6,10 +6,10 @@ import filterpy.kalman as fk
 import numpy as np
 import pytest
 
-from jaxsim.estimation.lgssm import kalman_filter
+from jaxsim.estimation.lgssm import kalman_filter, lgssm
 from jaxsim.estimation.parallel import parallel_kalman_filter, parallel_rts_smoother
 from jaxsim.estimation.smoothers import extended_rts_smoother, rts_smoother, unscented_rts_smoother
-from tests.estimation.helpers import random_model, random_time_varying, simulate_np
+from tests.estimation.helpers import filterpy_kalman, random_model, random_time_varying, simulate_np
 from tests.estimation.test_nonlinear import (
     EKF_CASES,
     _filterpy_sigma_filter,
@@ -39,6 +39,26 @@ def test_rts_matches_filterpy():
     sx, sp, _, _ = kf.rts_smoother(np.array(xs), np.array(ps), [F] * 30, [Q] * 30)
     np.testing.assert_allclose(ours.means, sx[:, :, 0], rtol=1e-9, atol=1e-10)
     np.testing.assert_allclose(ours.covs, sp, rtol=1e-9, atol=1e-10)
+
+
+def test_time_varying_masked_rts_matches_filterpy():
+    """Per-step ``F_t, Q_t, H_t, R_t`` and missing components (two steps fully masked, the last one
+    included): FilterPy's ``KalmanFilter`` with per-step matrices, then its ``rts_smoother`` with the
+    per-step ``Fs, Qs`` (``Fs[t]`` drives ``t → t+1``, as our ``F[t]``)."""
+    rng = np.random.default_rng(24)
+    t = 16
+    tv = random_time_varying(rng, t)
+    model = lgssm(tv.F, tv.Q, tv.H, tv.R, tv.m0, tv.P0)  # FilterPy's smoother takes no inputs
+    _, y = simulate_np(model, rng, t, None)
+    mask = rng.random((t, 2)) > 0.3
+    mask[[4, t - 1]] = False
+    ref = filterpy_kalman(model, y, mask=mask)
+    sx, sp, gains, _ = fk.rts_smoother(ref["means"], ref["covs"], np.asarray(model.F), np.asarray(model.Q))
+    got = rts_smoother(model, np.where(mask, y, np.nan), missing="nan")
+    np.testing.assert_allclose(got.filtered.means, ref["means"], rtol=1e-10, atol=1e-11)
+    np.testing.assert_allclose(got.means, sx, rtol=1e-10, atol=1e-11)
+    np.testing.assert_allclose(got.covs, sp, rtol=1e-10, atol=1e-11)
+    np.testing.assert_allclose(got.gains, gains[:-1], rtol=1e-10, atol=1e-11)
 
 
 def test_unscented_rts_matches_filterpy():
