@@ -127,7 +127,7 @@ def _underdamped_step(n: int = 60, zeta: float = 0.35, wn: float = 6.0, t_final:
 def test_soft_overshoot_gradient_matches_finite_differences():
     _, y = _underdamped_step()
     for y_final in (None, 1.0):  # y_final from the last sample (a gradient path of its own) or given
-        f = jax.jit(lambda v: metrics.soft_overshoot(v, y_final, temperature=0.5))
+        f = jax.jit(lambda v, yf=y_final: metrics.soft_overshoot(v, yf, temperature=0.5))
         g = np.asarray(jax.grad(f)(jnp.asarray(y)))
         fd = _central_differences(f, y)
         assert np.max(np.abs(fd)) > 1.0

@@ -8,7 +8,7 @@ matrix (float64).  Each loss is jitted once as ``value_and_grad`` and reused for
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import jax
 import jax.numpy as jnp

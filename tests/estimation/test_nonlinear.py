@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import Callable, NamedTuple
+from collections.abc import Callable
+from typing import NamedTuple
 
 import filterpy.kalman as fk
 import jax.numpy as jnp
@@ -241,8 +242,8 @@ def filterpy_ekf(case: EKFCase, y: np.ndarray, mask: np.ndarray) -> dict[str, np
         idx = np.flatnonzero(mask[k])
         ll = 0.0
         if idx.size:
-            ekf.update(y[k, idx].reshape(-1, 1), lambda x: case.jac_h(x.ravel())[idx],
-                       lambda x: case.h(x.ravel())[idx].reshape(-1, 1), R=R[np.ix_(idx, idx)])
+            ekf.update(y[k, idx].reshape(-1, 1), lambda x, i=idx: case.jac_h(x.ravel())[i],
+                       lambda x, i=idx: case.h(x.ravel())[i].reshape(-1, 1), R=R[np.ix_(idx, idx)])
             ll = ekf.log_likelihood
         out["means"].append(ekf.x.ravel().copy())
         out["covs"].append(ekf.P.copy())
