@@ -39,24 +39,35 @@ def tf2ss(num: jax.Array, den: jax.Array) -> tuple[jax.Array, jax.Array, jax.Arr
     return a, b, c, d
 
 
-def characteristic_polynomial(a: jax.Array) -> jax.Array:
-    """Coefficients of ``det(sI − A)``, shape ``(n + 1,)``, leading 1 (Faddeev–LeVerrier)."""
-    a = jnp.asarray(a)
-    check_square("a", a)
+def _faddeev_leverrier(a: jax.Array) -> tuple[jax.Array, list[jax.Array]]:
+    """``det(sI − A)`` coefficients ``(n + 1,)`` and the matrices ``M_1 … M_n`` with
+    ``adj(sI − A) = Σ_k M_k s^(n−k)`` (``M_1 = I``, ``M_(k+1) = A M_k + c_k I``)."""
     n = a.shape[0]
     coeffs = [jnp.ones((), a.dtype)]
+    mats = []
     m = jnp.zeros_like(a)
     eye = jnp.eye(n, dtype=a.dtype)
     for k in range(1, n + 1):
         m = a @ m + coeffs[-1] * eye
+        mats.append(m)
         coeffs.append(-jnp.trace(a @ m) / k)
-    return jnp.stack(coeffs)
+    return jnp.stack(coeffs), mats
+
+
+def characteristic_polynomial(a: jax.Array) -> jax.Array:
+    """Coefficients of ``det(sI − A)``, shape ``(n + 1,)``, leading 1 (Faddeev–LeVerrier)."""
+    a = jnp.asarray(a)
+    check_square("a", a)
+    return _faddeev_leverrier(a)[0]
 
 
 def ss2tf(a: jax.Array, b: jax.Array, c: jax.Array, d: jax.Array) -> tuple[jax.Array, jax.Array]:
     """SISO ``(A, B, C, D)`` → ``(num, den)``, both of length ``n + 1``.
 
-    Uses ``num = det(sI − A + B C) + (D − 1)·det(sI − A)`` (as ``scipy.signal.ss2tf``).
+    ``num = C adj(sI − A) B + D·det(sI − A)`` with the adjugate from the Faddeev–LeVerrier
+    recursion, so the rounding errors scale with ``|C|·|B|`` and ``|D|``.  (``scipy.signal``'s
+    ``det(sI − A + BC) + (D − 1)·det(sI − A)`` loses ``C B`` and ``D`` to cancellation against the
+    monic determinants when they are small: ``B = 1e-9`` came back with a relative error of 1e-7.)
     """
     a, b, c, d = (jnp.atleast_2d(jnp.asarray(m, dtype=float)) for m in (a, b, c, d))
     check_square("a", a)
@@ -67,6 +78,6 @@ def ss2tf(a: jax.Array, b: jax.Array, c: jax.Array, d: jax.Array) -> tuple[jax.A
         raise ValueError(f"c: expected shape (1, {n}) for a SISO system, got {tuple(c.shape)}")
     if d.shape != (1, 1):
         raise ValueError(f"d: expected shape (1, 1), got {tuple(d.shape)}")
-    den = characteristic_polynomial(a)
-    num = characteristic_polynomial(a - b @ c) + (d[0, 0] - 1.0) * den
-    return num, den
+    den, mats = _faddeev_leverrier(a)
+    cab = jnp.stack([jnp.zeros((), a.dtype)] + [(c @ m @ b)[0, 0] for m in mats])
+    return cab + d[0, 0] * den, den

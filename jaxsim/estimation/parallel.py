@@ -64,7 +64,9 @@ def _filter_elements(model, y, mask, F, Q, c, H, R):
     def element(y_t, m_t, F_t, Q_t, c_t, H_t, R_t, first):
         res, h, r = kalman.mask_measurement(y_t, H_t, R_t, m_t)
         F_e = jnp.where(first, jnp.zeros_like(F_t), F_t)
-        Q_e = jnp.where(first, model.P0, Q_t)
+        # symmetrised as the serial filter's F P Fᵀ + Q is: the result (and its gradient in Q) then
+        # depends on the symmetric part only, as there
+        Q_e = jnp.where(first, model.P0, kalman.symmetrize(Q_t))
         c_e = jnp.where(first, model.m0, c_t)
         s = kalman.symmetrize(h @ Q_e @ h.T + r)
         chol = jnp.linalg.cholesky(s)

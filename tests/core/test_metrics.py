@@ -102,3 +102,52 @@ def test_smooth_surrogates_have_finite_gradients():
 
     g = jax.grad(loss)(3.0)
     assert np.isfinite(float(g)) and float(g) != 0.0
+
+
+def _central_differences(fn, x: np.ndarray, rel_step: float = 1e-6) -> np.ndarray:
+    """Central differences of a scalar ``fn`` along every coordinate of ``x`` (step relative to max|x|)."""
+    h = rel_step * max(float(np.max(np.abs(x))), 1e-3)
+    out = np.empty(x.size)
+    for i in range(x.size):
+        e = np.zeros(x.size)
+        e[i] = h
+        e = e.reshape(x.shape)
+        out[i] = (float(fn(x + e)) - float(fn(x - e))) / (2 * h)
+    return out.reshape(x.shape)
+
+
+def _underdamped_step(n: int = 60, zeta: float = 0.35, wn: float = 6.0, t_final: float = 3.0):
+    """Unit-step response of ``wn²/(s² + 2ζwn s + wn²)`` sampled on ``n`` points (overshoots ~30 %)."""
+    t = np.linspace(0.0, t_final, n)
+    wd = wn * np.sqrt(1 - zeta**2)
+    y = 1 - np.exp(-zeta * wn * t) * (np.cos(wd * t) + zeta / np.sqrt(1 - zeta**2) * np.sin(wd * t))
+    return t, y
+
+
+def test_soft_overshoot_gradient_matches_finite_differences():
+    _, y = _underdamped_step()
+    for y_final in (None, 1.0):  # y_final from the last sample (a gradient path of its own) or given
+        f = jax.jit(lambda v, yf=y_final: metrics.soft_overshoot(v, yf, temperature=0.5))
+        g = np.asarray(jax.grad(f)(jnp.asarray(y)))
+        fd = _central_differences(f, y)
+        assert np.max(np.abs(fd)) > 1.0
+        np.testing.assert_allclose(g, fd, rtol=1e-6, atol=1e-6 * np.max(np.abs(fd)))
+    f_final = jax.jit(lambda yf: metrics.soft_overshoot(jnp.asarray(y), yf, temperature=0.5))
+    fd = _central_differences(f_final, np.array(1.0))
+    np.testing.assert_allclose(jax.grad(f_final)(1.0), fd, rtol=1e-6)
+    # a flat response has no overshoot: every v is 0, so the surrogate is exactly τ·log 2
+    np.testing.assert_allclose(metrics.soft_overshoot(jnp.ones(10), temperature=0.5), 0.5 * np.log(2.0), rtol=1e-15)
+
+
+def test_soft_settling_time_gradient_matches_finite_differences():
+    t, y = _underdamped_step()
+    # wider temperatures than the defaults: with the defaults (τ_b = 0.002) the third derivative is
+    # so large that the central difference's own truncation error reaches ~3e-7 of the gradient
+    kw = {"band": 0.05, "band_temperature": 0.02, "time_temperature": 0.1}
+    f = jax.jit(lambda v: metrics.soft_settling_time(jnp.asarray(t), v, **kw))
+    g = np.asarray(jax.grad(f)(jnp.asarray(y)))
+    fd = _central_differences(f, y)
+    assert np.max(np.abs(fd)) > 1.0
+    np.testing.assert_allclose(g, fd, rtol=1e-6, atol=1e-6 * np.max(np.abs(fd)))
+    f_final = jax.jit(lambda yf: metrics.soft_settling_time(jnp.asarray(t), jnp.asarray(y), yf, **kw))
+    np.testing.assert_allclose(jax.grad(f_final)(1.0), _central_differences(f_final, np.array(1.0)), rtol=1e-6)

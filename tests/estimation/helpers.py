@@ -45,3 +45,36 @@ def simulate_np(model: LinearGaussianSSM, rng: np.random.Generator, t: int, u=No
         if u is not None:
             x = x + get(model.B, k) @ u[k]
     return np.array(xs), np.array(ys)
+
+
+def filterpy_kalman(model: LinearGaussianSSM, y: np.ndarray, u=None, mask=None) -> dict[str, np.ndarray]:
+    """FilterPy's ``KalmanFilter`` as an oracle, stepped in our order (update with ``y_t``, then predict
+    with ``F_t, Q_t, B_t u_t``), with per-step matrices for time-varying fields.  The update uses only
+    the available components of ``mask (T, p)`` and is skipped when none is.  Returns the per-step
+    filtered and predicted moments and log-likelihoods (0 on fully masked steps)."""
+    import filterpy.kalman
+
+    get = lambda a, k: np.asarray(a, float)[k] if np.ndim(a) == 3 else np.asarray(a, float)  # noqa: E731
+    t, p = np.shape(y)
+    n = model.n_states
+    mask = np.ones((t, p), bool) if mask is None else np.asarray(mask, bool)
+    kf = filterpy.kalman.KalmanFilter(dim_x=n, dim_z=p)
+    kf.x, kf.P = np.asarray(model.m0, float).reshape(n, 1).copy(), np.asarray(model.P0, float).copy()
+    out: dict[str, list] = {k: [] for k in ("means", "covs", "predicted_means", "predicted_covs", "log_likelihoods")}
+    for k in range(t):
+        out["predicted_means"].append(kf.x.ravel().copy())
+        out["predicted_covs"].append(kf.P.copy())
+        idx = np.flatnonzero(mask[k])
+        ll = 0.0
+        if idx.size:
+            H, R = get(model.H, k)[idx], get(model.R, k)[np.ix_(idx, idx)]
+            kf.update(np.asarray(y[k], float)[idx].reshape(-1, 1), R=R, H=H)
+            ll = kf.log_likelihood
+        out["means"].append(kf.x.ravel().copy())
+        out["covs"].append(kf.P.copy())
+        out["log_likelihoods"].append(ll)
+        if u is None:
+            kf.predict(F=get(model.F, k), Q=get(model.Q, k))
+        else:
+            kf.predict(u=np.asarray(u[k], float).reshape(-1, 1), B=get(model.B, k), F=get(model.F, k), Q=get(model.Q, k))
+    return {k: np.array(v) for k, v in out.items()}

@@ -4,26 +4,28 @@ from __future__ import annotations
 
 import functools
 
+import dynamax.linear_gaussian_ssm.inference as dyn
+import filterpy.kalman
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from dynamax.utils.utils import psd_solve
 
 from jaxsim.estimation import kalman
 from jaxsim.estimation.lgssm import kalman_filter, lgssm, sample
 from jaxsim.estimation.types import GaussianState
-from tests.estimation.helpers import random_model, random_time_varying, simulate_np
+from tests.estimation.helpers import filterpy_kalman, random_model, random_time_varying, simulate_np
 
 
 def test_filter_matches_filterpy_step_by_step():
-    filterpy = pytest.importorskip("filterpy.kalman")
     rng = np.random.default_rng(0)
     model = random_model(rng, n=4, p=2, m=1)
     u = rng.standard_normal((30, 1))
     _, y = simulate_np(model, rng, 30, u)
     ours = kalman_filter(model, y, u)
 
-    kf = filterpy.KalmanFilter(dim_x=4, dim_z=2, dim_u=1)
+    kf = filterpy.kalman.KalmanFilter(dim_x=4, dim_z=2, dim_u=1)
     kf.F, kf.Q, kf.H, kf.R, kf.B = (np.asarray(v) for v in (model.F, model.Q, model.H, model.R, model.B))
     kf.x, kf.P = np.asarray(model.m0)[:, None].copy(), np.asarray(model.P0).copy()
     means, covs, lls = [], [], []
@@ -39,9 +41,6 @@ def test_filter_matches_filterpy_step_by_step():
 
 
 def test_log_likelihood_matches_dynamax():
-    dyn = pytest.importorskip("dynamax.linear_gaussian_ssm.inference")
-    from dynamax.utils.utils import psd_solve
-
     rng = np.random.default_rng(1)
     model = random_model(rng, n=4, p=2, m=1)
     u = rng.standard_normal((40, 1))
@@ -79,24 +78,31 @@ def test_update_forms_agree_with_joseph(form):
         np.testing.assert_allclose(getattr(got, field), getattr(ref, field), rtol=1e-9, atol=1e-11)
 
 
-def test_time_varying_model_matches_step_functions():
+def test_time_varying_masked_filter_matches_filterpy_step_by_step():
+    """``F_t, Q_t, H_t, R_t, B_t`` all vary with ``t``; some steps lose one component, some both
+    (the first and the last included).  Oracle: FilterPy's ``KalmanFilter`` fed the per-step
+    matrices, updating with the available components only."""
     rng = np.random.default_rng(3)
-    t = 12
+    t = 14
     model = random_time_varying(rng, t)
     u = rng.standard_normal((t, 1))
     _, y = simulate_np(model, rng, t, u)
-    res = kalman_filter(model, y, u)
-    state = GaussianState(model.m0, model.P0)
-    total = 0.0
-    for k in range(t):
-        state, innov = kalman.update(state, y[k], model.H[k], model.R[k])
-        np.testing.assert_allclose(res.means[k], state.mean, rtol=1e-12, atol=1e-12)
-        total += innov.log_likelihood
-        state = kalman.predict(state, model.F[k], model.Q[k], model.B[k], u[k])
-    np.testing.assert_allclose(res.log_likelihood, total, rtol=1e-12)
+    mask = rng.random((t, 2)) > 0.3
+    mask[[0, 6, t - 1]] = False
+    mask[[2, 9]] = [True, False]
+    ref = filterpy_kalman(model, y, u, mask)
+    got = kalman_filter(model, np.where(mask, y, np.nan), u, missing="nan")
+    for field, want in ref.items():
+        np.testing.assert_allclose(np.asarray(getattr(got, field)), want, rtol=1e-10, atol=1e-11, err_msg=field)
+    np.testing.assert_allclose(got.log_likelihood, ref["log_likelihoods"].sum(), rtol=1e-11)
+    np.testing.assert_array_equal(got.dof, mask.sum(axis=1))
+    np.testing.assert_array_equal(got.accepted, mask.any(axis=1))
+    # an explicit mask over arbitrary values at the masked entries gives the same run
+    same = kalman_filter(model, np.where(mask, y, 1e3), u, mask=mask)
+    np.testing.assert_allclose(same.means, got.means, rtol=1e-13, atol=1e-13)
 
 
-def test_masked_filter_equals_filter_on_available_components():
+def test_multi_rate_filter_matches_filterpy_on_available_components():
     """Multi-rate: component 0 every step, component 1 every 3rd step (NaN otherwise)."""
     rng = np.random.default_rng(4)
     model = random_model(rng, n=4, p=2)
@@ -104,20 +110,11 @@ def test_masked_filter_equals_filter_on_available_components():
     y = y.copy()
     y[np.arange(24) % 3 != 0, 1] = np.nan
     res = kalman_filter(model, y, missing="nan")
-    state, total = GaussianState(model.m0, model.P0), 0.0
-    H, R = np.asarray(model.H), np.asarray(model.R)
-    for k in range(24):
-        idx = [0, 1] if k % 3 == 0 else [0]
-        state, innov = kalman.update(state, jnp.asarray(y[k, idx]), H[idx], R[np.ix_(idx, idx)])
-        total += innov.log_likelihood
-        np.testing.assert_allclose(res.means[k], state.mean, rtol=1e-11, atol=1e-12)
-        np.testing.assert_allclose(res.covs[k], state.cov, rtol=1e-11, atol=1e-12)
-        state = kalman.predict(state, model.F, model.Q)
-    np.testing.assert_allclose(res.log_likelihood, total, rtol=1e-11)
+    ref = filterpy_kalman(model, y, mask=np.isfinite(y))
+    for field, want in ref.items():
+        np.testing.assert_allclose(np.asarray(getattr(res, field)), want, rtol=1e-10, atol=1e-11, err_msg=field)
     np.testing.assert_array_equal(res.dof, np.where(np.arange(24) % 3 == 0, 2, 1))
-    # an explicit mask gives the same run, and a fully masked step is a pure prediction
-    res2 = kalman_filter(model, np.nan_to_num(y), mask=np.isfinite(y))
-    np.testing.assert_allclose(res2.means, res.means, rtol=1e-13, atol=1e-13)
+    # a fully masked step is a pure prediction
     full = kalman_filter(model, np.nan_to_num(y), mask=np.arange(24) % 2 == 0)
     np.testing.assert_allclose(full.means[1], full.predicted_means[1], rtol=0, atol=0)
     assert not bool(full.accepted[1]) and bool(full.accepted[0])

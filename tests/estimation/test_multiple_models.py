@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import filterpy.kalman as fk
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -50,7 +51,6 @@ def _init():
 
 
 def test_imm_matches_filterpy():
-    fk = pytest.importorskip("filterpy.kalman")
     y = _manoeuvring_track()
     filters = []
     for q in (0.01, 1.0):
