@@ -15,6 +15,9 @@ Rules (:func:`check_output_folder`, called before anything is computed):
   toolkit's, marker or not (a killed sweep has not written its marker yet); whether the checkpoint
   holds *this* sweep is the checkpoint's own check (:class:`jaxsim.montecarlo.store.ChunkStore`:
   another sweep is refused, and so are existing chunks without ``--resume``);
+* a folder written before markers existed (no marker; its ``results.json`` names this study and
+  every other file is a top-level CSV or PNG) counts as this study's previous output too, so that
+  re-running a README command over an older output works;
 * anything else — another study's or command's output, any file the toolkit did not write, a path
   that is not a folder — is refused with ``ValueError`` naming the folder and a few of the files;
 * writability is probed by creating and removing a file: in the folder (or, if it does not exist
@@ -89,13 +92,25 @@ def _toolkit_file(name: str, command: str) -> bool:
     return False
 
 
+def _legacy_files(folder: Path, study: str, command: str) -> set[str]:
+    """A pre-marker output of this study: its ``results.json`` (naming the study) and top-level
+    CSV/PNG files; empty if ``folder`` is not one."""
+    try:
+        written = json.loads((folder / "results.json").read_text()).get("study")
+    except (OSError, ValueError, AttributeError):
+        return set()
+    if written != (study if command == "run" else f"{study} (sweep)"):
+        return set()
+    return {f for f in _listing(folder) if f == "results.json" or ("/" not in f and f.endswith((".csv", ".png")))}
+
+
 def _check_owner(folder: Path, study: str, command: str) -> None:
     marker = _read_marker(folder)
     if marker is not None and (marker.get("command"), marker.get("study")) != (command, study):
         raise ValueError(
             f"out: {folder} holds the output of `{marker.get('command')} {marker.get('study')}`, not of "
             f"`{command} {study}`; nothing was computed — choose another folder or delete that one")
-    listed = set(marker["files"]) if marker is not None else set()
+    listed = set(marker["files"]) if marker is not None else _legacy_files(folder, study, command)
     foreign = [f for f in _listing(folder) if f not in listed and not _toolkit_file(f, command)]
     if foreign:
         shown = ", ".join(foreign[:_SHOWN]) + (f", … ({len(foreign)} in all)" if len(foreign) > _SHOWN else "")

@@ -166,6 +166,22 @@ def test_run_replaces_its_own_previous_output_and_leaves_no_stale_file(tmp_path,
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no staging folder left beside it
 
 
+def test_run_replaces_an_output_written_before_markers_existed(tmp_path, fake, capsys):
+    """A folder from an older version (no marker; results.json naming the study, CSV/PNG files)
+    is this study's previous output: re-running the README command over it works."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "results.json").write_text(json.dumps({"study": "fake", "metrics": {}}))
+    (out / "old_table.csv").write_text("a\n1\n")
+    (out / "old_plot.png").write_bytes(b"png")
+    assert cli.main(["run", "fake", "--out", str(out)]) == 0
+    assert "old_table.csv" not in _snapshot(out) and MARKER in _snapshot(out)
+    (out / MARKER).unlink()  # the same folder, older, but with a user's note in it: refused
+    (out / "notes.txt").write_text("mine")
+    assert cli.main(["run", "fake", "--out", str(out)]) == 2
+    assert "notes.txt" in _one_error_line(capsys)
+
+
 def test_an_interrupted_run_leaves_the_previous_output_intact(tmp_path, fake, capsys, monkeypatch):
     out = tmp_path / "out"
     assert cli.main(["run", "fake", "--out", str(out)]) == 0
