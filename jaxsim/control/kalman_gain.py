@@ -10,8 +10,10 @@ covariance solves the DARE of ``(Aᵀ, Cᵀ)``; the update gain is ``K = P⁻C�
 posterior covariance is formed in Joseph form ``(I−KC)P⁻(I−KC)ᵀ + KRKᵀ``.  The predictor-form gain
 of ``control.dlqe``-style observers ``x̂⁺ = A x̂ + B u + L (y − C x̂)`` is ``L = A K``.
 
-Both need ``(A, C)`` detectable (else ``ValueError`` on concrete inputs, NaN under tracing), and
-no mode on the stability boundary uncontrollable from the process noise.
+Both need ``(A, C)`` detectable and no mode on the stability boundary uncontrollable from the
+process noise (else ``ValueError`` on concrete inputs, judged on the balanced data after the solve;
+NaN under tracing).  ``discrete_kalman`` accepts a singular measurement covariance ``R ⪰ 0`` when
+``C P⁻ Cᵀ + R ≻ 0``.
 """
 
 from __future__ import annotations
@@ -20,17 +22,15 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 from jax.scipy.linalg import cho_factor, cho_solve
 
-from jaxsim.control.pbh import check_detectable, check_no_unobservable_boundary_modes
 from jaxsim.control.riccati import (
     check_positive_semidefinite,
+    check_stabilising,
     prepare_riccati_inputs,
     solve_continuous_are,
     solve_discrete_are,
 )
-from jaxsim.core.validation import is_concrete
 
 
 class KalmanBucyGain(NamedTuple):
@@ -63,16 +63,12 @@ def _noise_input(a, c, w, g):
 
 
 def _checked_dual(a, c, w, v, g, discrete: bool, names: tuple[str, str, str, str]):
-    an, cn, wn, vn = names
+    _, cn, wn, _ = names
     a, c, gwg = _noise_input(a, c, w, g)
     if c.ndim != 2 or (a.ndim == 2 and c.shape[1] != a.shape[0]):
         raise ValueError(f"{cn}: expected shape (p, {a.shape[0]}), got {tuple(c.shape)}")
-    at, ct, gwg, v = prepare_riccati_inputs(a.T, c.T, gwg, v, names=names)
+    at, ct, gwg, v = prepare_riccati_inputs(a.T, c.T, gwg, v, names=names, r_definite=not discrete)
     check_positive_semidefinite(wn, gwg)
-    if is_concrete((at, ct, gwg)):
-        check_detectable(an, np.asarray(at).T, cn, np.asarray(ct).T, discrete=discrete)
-        check_no_unobservable_boundary_modes(an, np.asarray(at).T, wn, np.asarray(gwg), discrete=discrete,
-                                             dual=True)
     return at, ct, gwg, v
 
 
@@ -86,7 +82,8 @@ def kalman_bucy(a, c, w, v, g=None, *, names: tuple[str, str, str, str] = ("a", 
         names: the caller's names of ``(a, c, w, v)``, used in error messages.
     """
     at, ct, gwg, v = _checked_dual(a, c, w, v, g, discrete=False, names=names)
-    p = solve_continuous_are(at, ct, gwg, v, names=names)
+    p = solve_continuous_are(at, ct, gwg, v, names=names, dual=True)
+    check_stabilising(p, at, ct, gwg, v, discrete=False, names=names, dual=True)
     return KalmanBucyGain(cho_solve(cho_factor(v), ct.T @ p).T, p)
 
 
@@ -95,7 +92,8 @@ def discrete_kalman(a, c, q, r, g=None, *,
     """Steady-state discrete Kalman filter gain and covariances (argument shapes as :func:`kalman_bucy`,
     with ``q``, ``r`` the process and measurement covariances per step)."""
     at, ct, gqg, r = _checked_dual(a, c, q, r, g, discrete=True, names=names)
-    p_prior = solve_discrete_are(at, ct, gqg, r, names=names)
+    p_prior = solve_discrete_are(at, ct, gqg, r, names=names, dual=True)
+    check_stabilising(p_prior, at, ct, gqg, r, discrete=True, names=names, dual=True)
     c = ct.T
     s = c @ p_prior @ c.T + r
     k = cho_solve(cho_factor(s), c @ p_prior).T

@@ -5,9 +5,10 @@
 * ``dlqr``: minimises ``Σ (xᵀQx + uᵀRu)`` for ``x⁺ = Ax + Bu``; ``K = (R + BᵀPB)⁻¹BᵀPA``.
 
 Both are differentiable in ``A, B, Q, R`` through the Riccati solvers' implicit derivatives and
-vmappable.  On concrete inputs they check ``Q ⪰ 0``, ``R ≻ 0``, stabilisability of ``(A, B)``
-and that no mode on the stability boundary is unobservable from ``Q`` (the exact condition for a
-stabilising solution; detectability of ``(A, Q^{1/2})`` implies it), raising ``ValueError``.
+vmappable.  On concrete inputs they check ``Q ⪰ 0`` and ``R ≻ 0`` (``dlqr``: ``R ⪰ 0``), and after
+the solve raise ``ValueError`` if ``(A, B)`` is not stabilisable or a mode on the stability boundary
+is unobservable from ``Q`` (then no stabilising gain exists) — judged on the balanced data, so
+the verdict does not depend on the state units.
 """
 
 from __future__ import annotations
@@ -16,18 +17,16 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 from jax.scipy.linalg import cho_factor, cho_solve
 
-from jaxsim.control.pbh import check_no_unobservable_boundary_modes
 from jaxsim.control.riccati import (
     check_positive_semidefinite,
+    check_stabilising,
     dare_gain,
     prepare_riccati_inputs,
     solve_continuous_are,
     solve_discrete_are,
 )
-from jaxsim.core.validation import is_concrete
 
 
 class LQRGain(NamedTuple):
@@ -38,10 +37,8 @@ class LQRGain(NamedTuple):
 
 
 def _check_weights(a, b, q, r, discrete: bool):
-    a, b, q, r = prepare_riccati_inputs(a, b, q, r)
+    a, b, q, r = prepare_riccati_inputs(a, b, q, r, r_definite=not discrete)
     check_positive_semidefinite("q", q)
-    if is_concrete((a, q)):
-        check_no_unobservable_boundary_modes("a", np.asarray(a), "q", np.asarray(q), discrete=discrete)
     return a, b, q, r
 
 
@@ -49,13 +46,15 @@ def lqr(a, b, q, r) -> LQRGain:
     """Continuous-time LQR gain.
 
     Args:
-        a: ``(n, n)``; b: ``(n, m)``; q: ``(n, n)`` symmetric ⪰ 0; r: ``(m, m)`` symmetric ≻ 0.
+        a: ``(n, n)``; b: ``(n, m)``; q: ``(n, n)`` symmetric ⪰ 0; r: ``(m, m)`` symmetric ≻ 0
+            (``dlqr``: ⪰ 0 is enough when ``R + BᵀPB ≻ 0``).
 
     Returns:
         :class:`LQRGain` with ``k = R⁻¹BᵀP``.
     """
     a, b, q, r = _check_weights(a, b, q, r, discrete=False)
     p = solve_continuous_are(a, b, q, r)
+    check_stabilising(p, a, b, q, r, discrete=False)
     return LQRGain(cho_solve(cho_factor(r), b.T @ p), p)
 
 
@@ -63,6 +62,7 @@ def dlqr(a, b, q, r) -> LQRGain:
     """Discrete-time LQR gain ``K = (R + BᵀPB)⁻¹BᵀPA`` (shapes as :func:`lqr`)."""
     a, b, q, r = _check_weights(a, b, q, r, discrete=True)
     p = solve_discrete_are(a, b, q, r)
+    check_stabilising(p, a, b, q, r, discrete=True)
     return LQRGain(dare_gain(p, a, b, r), p)
 
 

@@ -14,7 +14,10 @@ These checks run in NumPy at the public boundary only (they raise ``ValueError``
 
 from __future__ import annotations
 
+import jax.numpy as jnp
 import numpy as np
+
+from jaxsim.control._symplectic_balance import balance_pair
 
 DEFAULT_RTOL = 1e-8
 
@@ -42,8 +45,13 @@ def uncontrollable_modes(
             (only modes on the imaginary axis / unit circle), or ``"all"`` (controllability).
         rtol: relative threshold on the smallest singular value of ``[A − λI, B]``.
     """
-    a = np.asarray(a, dtype=complex)
-    b = np.asarray(b, dtype=complex).reshape(a.shape[0], -1)
+    a = np.asarray(a)
+    b = np.asarray(b).reshape(a.shape[0], -1)
+    real = not (np.iscomplexobj(a) or np.iscomplexobj(b))
+    if real and a.size and np.all(np.isfinite(a)) and np.all(np.isfinite(b)):
+        a, b = (np.asarray(m) for m in balance_pair(jnp.asarray(a), jnp.asarray(b)))
+    a = a.astype(complex)
+    b = b.astype(complex)
     n = a.shape[0]
     # Column scalings leave the PBH rank unchanged: unit-norm columns of B (so weights spanning
     # many decades, e.g. Q = diag(1e8, 1), do not hide behind the largest) and A over its norm.

@@ -1,32 +1,36 @@
 """Algebraic Riccati equations (CARE, DARE): float64 forward solves, implicit derivatives.
 
-Conventions are SciPy's (``solve_continuous_are`` / ``solve_discrete_are``), with ``R ≻ 0``:
+Conventions are SciPy's (``solve_continuous_are`` / ``solve_discrete_are``):
 
-* CARE: ``Aᵀ X + X A − X B R⁻¹ Bᵀ X + Q = 0``;
-* DARE: ``Aᵀ X A − X − Aᵀ X B (R + Bᵀ X B)⁻¹ Bᵀ X A + Q = 0``;
+* CARE: ``Aᵀ X + X A − X B R⁻¹ Bᵀ X + Q = 0`` with ``R ≻ 0``;
+* DARE: ``Aᵀ X A − X − Aᵀ X B (R + BᵀXB)⁻¹ Bᵀ X A + Q = 0`` with ``R ⪰ 0`` (singular ``R`` allowed:
+  the equation needs ``R + BᵀXB ≻ 0`` at the solution, as in SciPy's DAREX examples 3 and 4).
 
-and the *stabilising* solution is returned (``A − B R⁻¹ Bᵀ X`` Hurwitz, resp.
-``A − B (R + BᵀXB)⁻¹ BᵀXA`` Schur).
+``Q`` may be indefinite.  The solvers return the *stabilising* solution (``A − B R⁻¹ Bᵀ X`` Hurwitz,
+resp. ``A − B (R + BᵀXB)⁻¹ BᵀXA`` Schur) when there is one.  When the Hamiltonian (symplectic pencil)
+has eigenvalues on the stability boundary there is none; then the *maximal* solution is returned,
+as SciPy does, and its closed loop is only marginally stable — :func:`riccati_diagnostics` says so
+(``marginal``), and on concrete inputs a :class:`MarginalStabilityWarning` is issued.  The answer no
+longer depends on the last bit of rounding: a problem within rounding of the boundary gets the
+same (maximal) solution and the same verdict from either side.
 
-Forward solves (never differentiated):
-
-* CARE — matrix sign function of the Hamiltonian ``H = [[A, −G], [−Q, −Aᵀ]]`` (``G = B R⁻¹ Bᵀ``),
-  iterated on the symmetric matrix ``J H`` with determinant scaling (Byers 1987); the stable
-  invariant subspace ``ker(sign H + I)`` gives ``X`` by least squares; then Newton–Kleinman
-  steps in defect-correction form (``A_clᵀ ΔX + ΔX A_cl = −Res(X)``, one Lyapunov solve each) polish
-  the result to the accuracy the problem's conditioning allows.
-* DARE — structure-preserving doubling (SDA, Chu–Fan–Lin 2005), then Hewer–Newton steps in
-  defect-correction form (one Stein solve each).
+Forward solves (never differentiated; :mod:`jaxsim.control._care_forward`,
+:mod:`jaxsim.control._dare_forward`): a state scaling by powers of two that balances the problem
+(so the verdict and the accuracy do not depend on the caller's state units), the matrix sign
+function (CARE) or structure-preserving doubling (DARE), Newton refinement, and for the boundary
+case Newton–Kleinman / Hewer iterations from a stabilising start down to the maximal solution.
 
 A result is kept only if it is finite, its relative residual is below ``1e-6`` and its closed
-loop is stable; otherwise the solvers return NaN (inside ``jit``/``vmap``) or raise ``ValueError``
-(on concrete inputs, together with a PBH stabilisability test before solving).
+loop is stable up to the marginal band; otherwise the solvers return NaN (inside ``jit``/``vmap``)
+or raise ``ValueError`` (on concrete inputs, with a diagnosis: a PBH test on the balanced pair
+names the uncontrollable unstable modes when there are any).
 
 Derivatives (``custom_jvp``, so forward and reverse mode): differentiating ``F(X, θ) = 0`` gives
 ``F_X[dX] = −F_θ[dθ]`` where ``F_X`` is the Lyapunov operator ``dX ↦ A_clᵀ dX + dX A_cl`` (CARE) or
 the Stein operator ``dX ↦ A_clᵀ dX A_cl − dX`` (DARE).  ``F_θ[dθ]`` is the JVP of the residual at
 fixed ``X``, and the linear solve is :mod:`jaxsim.control.lyapunov`'s, whose transpose is the
-adjoint Lyapunov/Stein equation — so a reverse-mode gradient costs one extra Lyapunov solve.
+adjoint Lyapunov/Stein equation — so a reverse-mode gradient costs one extra Lyapunov solve.  At a
+marginal solution that operator is singular and the derivatives do not exist: they are NaN.
 
 The forward solves use LAPACK's Schur decomposition and eigenvalues (through
 :mod:`jaxsim.control.lyapunov` and the closed-loop stability check), which JAX provides on CPU only.
@@ -34,217 +38,85 @@ The forward solves use LAPACK's Schur decomposition and eigenvalues (through
 
 from __future__ import annotations
 
+import warnings
+from functools import partial
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax.scipy.linalg import cho_factor, cho_solve, lu_factor, lu_solve
 
-from jaxsim.control import _bartels_stewart as bs
+from jaxsim.control._care_forward import care_forward
+from jaxsim.control._dare_forward import balancing_gain, dare_forward
+from jaxsim.control._riccati_common import (
+    MARGINAL,
+    care_measures,
+    care_residual,
+    dare_gain,
+    dare_measures,
+    dare_residual,
+    gain_matrix,
+    sym,
+)
+from jaxsim.control._symplectic_balance import balancing_exponents, scale_problem
 from jaxsim.control.lyapunov import continuous_lyapunov_unchecked, discrete_lyapunov_unchecked
-from jaxsim.control.pbh import check_stabilizable
+from jaxsim.control.pbh import uncontrollable_modes
 from jaxsim.core.validation import check_finite, check_square, is_concrete
 
-SIGN_TOL = 1e-13  # relative change at which the sign / doubling iterations stop
-MAX_ITER = 100
-NEWTON_STEPS = 3  # defect-correction steps after the sign / doubling iteration
-VALID_RESIDUAL = 1e-6  # relative residual above which a result is declared failed (NaN)
+__all__ = [
+    "MarginalStabilityWarning", "RiccatiDiagnostics", "balanced_data", "care_residual", "check_stabilising", "dare_gain", "dare_residual",
+    "gain_matrix", "riccati_diagnostics", "solve_continuous_are", "solve_discrete_are",
+]
 
 
-def _sym(m: jax.Array) -> jax.Array:
-    return 0.5 * (m + m.T)
-
-
-def _fro(m: jax.Array) -> jax.Array:
-    return jnp.sqrt(jnp.sum(m * m))
-
-
-def gain_matrix(b: jax.Array, r: jax.Array) -> jax.Array:
-    """``G = B R⁻¹ Bᵀ`` through a Cholesky factor of ``R`` (exactly symmetric)."""
-    low = jnp.linalg.cholesky(r)
-    y = jax.scipy.linalg.solve_triangular(low, b.T, lower=True)
-    return y.T @ y
-
-
-def care_residual(x: jax.Array, a: jax.Array, b: jax.Array, q: jax.Array, r: jax.Array) -> jax.Array:
-    """``Aᵀ X + X A − X B R⁻¹ Bᵀ X + Q`` (``(n, n)``)."""
-    return a.T @ x + x @ a - x @ gain_matrix(b, r) @ x + q
-
-
-def dare_gain(x: jax.Array, a: jax.Array, b: jax.Array, r: jax.Array) -> jax.Array:
-    """``K = (R + Bᵀ X B)⁻¹ Bᵀ X A`` (``(m, n)``)."""
-    bx = b.T @ x
-    return cho_solve(cho_factor(r + bx @ b), bx @ a)
-
-
-def dare_residual(x: jax.Array, a: jax.Array, b: jax.Array, q: jax.Array, r: jax.Array) -> jax.Array:
-    """``Aᵀ X A − X − Aᵀ X B (R + BᵀXB)⁻¹ Bᵀ X A + Q`` (``(n, n)``)."""
-    return a.T @ x @ a - x - (a.T @ x @ b) @ dare_gain(x, a, b, r) + q
-
-
-def relative_residual(res: jax.Array, *terms: jax.Array) -> jax.Array:
-    """``‖res‖_F / Σ‖term‖_F`` — the residual relative to the size of the equation's terms."""
-    scale = sum(_fro(t) for t in terms)
-    return _fro(res) / jnp.maximum(scale, jnp.finfo(res.dtype).tiny)
-
-
-# ----------------------------------------------------------------------------- CARE forward
-
-
-def _jmj(m: jax.Array, n: int) -> jax.Array:
-    """``J M J`` for ``J = [[0, I], [−I, 0]]`` without multiplications."""
-    m11, m12, m21, m22 = m[:n, :n], m[:n, n:], m[n:, :n], m[n:, n:]
-    return jnp.block([[-m22, m21], [m12, -m11]])
-
-
-class _SignState(NamedTuple):
-    w: jax.Array
-    k: jax.Array
-    change: jax.Array
-    prev_change: jax.Array
-
-
-def _hamiltonian_sign(a: jax.Array, g: jax.Array, q: jax.Array) -> jax.Array:
-    """``W = J·sign(H)`` (symmetric), by the scaled Newton iteration on ``J H``."""
-    n = a.shape[0]
-    w0 = jnp.block([[-q, -a.T], [-a, g]])  # J H, symmetric
-    eye = jnp.eye(2 * n, dtype=a.dtype)
-    inf = jnp.asarray(jnp.inf, a.dtype)
-
-    def body(s: _SignState) -> _SignState:
-        lu, piv = lu_factor(s.w)
-        log_det = jnp.sum(jnp.log(jnp.abs(jnp.diag(lu))))
-        c = jnp.where(s.change > 1e-2, jnp.exp(log_det / (2 * n)), 1.0)  # |det(W/c)| = 1
-        w_inv = lu_solve((lu, piv), eye)
-        w_new = _sym(0.5 * (s.w / c + c * _jmj(w_inv, n)))
-        change = jnp.sum(jnp.abs(w_new - s.w)) / jnp.sum(jnp.abs(w_new))
-        return _SignState(w_new, s.k + 1, change, s.change)
-
-    def cond(s: _SignState) -> jax.Array:
-        stagnated = (s.change < 1e-6) & (s.change >= 0.5 * s.prev_change)
-        return (s.k < MAX_ITER) & (s.change > SIGN_TOL) & ~stagnated & ~jnp.isnan(s.change)
-
-    return jax.lax.while_loop(cond, body, _SignState(w0, jnp.asarray(0), inf, inf)).w
-
-
-def _care_initial(a: jax.Array, g: jax.Array, q: jax.Array) -> jax.Array:
-    n = a.shape[0]
-    w = _hamiltonian_sign(a, g, q)
-    # sign(H) = −J W; [I; X] spans ker(sign(H) + I):  [−W22; W12 + I] X = [W21 − I; −W11]
-    eye = jnp.eye(n, dtype=a.dtype)
-    lhs = jnp.concatenate([-w[n:, n:], w[:n, n:] + eye], axis=0)
-    rhs = jnp.concatenate([w[n:, :n] - eye, -w[:n, :n]], axis=0)
-    return _sym(jnp.linalg.lstsq(lhs, rhs)[0])
-
-
-def _polish(x0, residual, correction, steps):
-    """Defect-correction steps ``x ← x + correction(x, residual(x))``, kept only if they help."""
-
-    def norm(x):
-        v = _fro(residual(x))
-        return jnp.where(jnp.isfinite(v), v, jnp.inf)
-
-    def body(_, state):
-        x, rn = state
-        x_new = _sym(x + correction(x, residual(x)))
-        rn_new = norm(x_new)
-        better = rn_new < rn
-        return jnp.where(better, x_new, x), jnp.where(better, rn_new, rn)
-
-    return jax.lax.fori_loop(0, steps, body, (x0, norm(x0)))[0]
-
-
-def _care_forward(a, b, q, r):
-    g = gain_matrix(b, r)
-    x0 = _care_initial(a, g, q)
-    residual = lambda x: a.T @ x + x @ a - x @ g @ x + q  # noqa: E731
-    correction = lambda x, res: bs.continuous_lyapunov((a - g @ x).T, -res)  # noqa: E731
-    x = _polish(x0, residual, correction, NEWTON_STEPS)
-    rel = relative_residual(residual(x), q, a.T @ x, x @ a, x @ g @ x)
-    stable = jnp.max(jnp.linalg.eigvals(a - g @ x).real) < 0
-    ok = jnp.all(jnp.isfinite(x)) & (rel <= VALID_RESIDUAL) & stable
-    return jnp.where(ok, x, jnp.nan)
-
-
-# ----------------------------------------------------------------------------- DARE forward
-
-
-class _SDAState(NamedTuple):
-    a: jax.Array
-    g: jax.Array
-    h: jax.Array
-    k: jax.Array
-    change: jax.Array
-
-
-def _dare_initial(a: jax.Array, g: jax.Array, q: jax.Array) -> jax.Array:
-    """Structure-preserving doubling: ``H_k → X`` quadratically."""
-    n = a.shape[0]
-    eye = jnp.eye(n, dtype=a.dtype)
-
-    def body(s: _SDAState) -> _SDAState:
-        lu = lu_factor(eye + s.g @ s.h)
-        y_a = lu_solve(lu, s.a)  # (I + G H)⁻¹ A
-        y_g = lu_solve(lu, s.g)  # (I + G H)⁻¹ G
-        a_new = s.a @ y_a
-        g_new = _sym(s.g + s.a @ y_g @ s.a.T)
-        h_new = _sym(s.h + s.a.T @ s.h @ y_a)
-        change = jnp.sum(jnp.abs(h_new - s.h)) / jnp.maximum(jnp.sum(jnp.abs(h_new)), 1e-300)
-        return _SDAState(a_new, g_new, h_new, s.k + 1, change)
-
-    def cond(s: _SDAState) -> jax.Array:
-        return (s.k < MAX_ITER) & (s.change > SIGN_TOL) & ~jnp.isnan(s.change)
-
-    inf = jnp.asarray(jnp.inf, a.dtype)
-    return jax.lax.while_loop(cond, body, _SDAState(a, g, q, jnp.asarray(0), inf)).h
-
-
-def _dare_forward(a, b, q, r):
-    x0 = _dare_initial(a, gain_matrix(b, r), q)
-    residual = lambda x: dare_residual(x, a, b, q, r)  # noqa: E731
-
-    def correction(x, res):
-        acl = a - b @ dare_gain(x, a, b, r)
-        return bs.discrete_lyapunov(acl.T, res)
-
-    x = _polish(x0, residual, correction, NEWTON_STEPS)
-    k = dare_gain(x, a, b, r)
-    rel = relative_residual(residual(x), q, x, a.T @ x @ a, a.T @ x @ b @ k)
-    stable = jnp.max(jnp.abs(jnp.linalg.eigvals(a - b @ k))) < 1
-    ok = jnp.all(jnp.isfinite(x)) & (rel <= VALID_RESIDUAL) & stable
-    return jnp.where(ok, x, jnp.nan)
+class MarginalStabilityWarning(UserWarning):
+    """A Riccati solution exists but its closed loop is only marginally stable (maximal solution)."""
 
 
 # ----------------------------------------------------------------------------- implicit derivatives
 
 
+def _nan_unless_stabilising(dx: jax.Array, margin: jax.Array) -> jax.Array:
+    """Derivatives exist only at a stabilising solution (the linearised operator is singular at a
+    marginal one): NaN otherwise.  A product, not a ``where``, so that it stays linear in ``dx``
+    (reverse mode transposes it)."""
+    return dx * jnp.where(margin >= MARGINAL, 1.0, jnp.nan).astype(dx.dtype)
+
+
 @jax.custom_jvp
 def _care(a, b, q, r):
-    return _care_forward(a, b, q, r)
+    return care_forward(a, b, q, r)
 
 
 @_care.defjvp
 def _care_jvp(primals, tangents):
     a, b, q, r = primals
-    x = _care(a, b, q, r)
+    x, margin = _care(a, b, q, r)
     _, rhs = jax.jvp(lambda *p: care_residual(x, *p), primals, tangents)
     acl = a - gain_matrix(b, r) @ x
-    return x, _sym(continuous_lyapunov_unchecked(acl.T, -rhs))
+    dx = _nan_unless_stabilising(sym(continuous_lyapunov_unchecked(acl.T, -rhs)), margin)
+    return (x, margin), (dx, jnp.zeros_like(margin))
 
 
 @jax.custom_jvp
 def _dare(a, b, q, r):
-    return _dare_forward(a, b, q, r)
+    return dare_forward(a, b, q, r)
 
 
 @_dare.defjvp
 def _dare_jvp(primals, tangents):
     a, b, q, r = primals
-    x = _dare(a, b, q, r)
+    x, margin = _dare(a, b, q, r)
     _, rhs = jax.jvp(lambda *p: dare_residual(x, *p), primals, tangents)
     acl = a - b @ dare_gain(x, a, b, r)
-    return x, _sym(discrete_lyapunov_unchecked(acl.T, rhs))
+    dx = _nan_unless_stabilising(sym(discrete_lyapunov_unchecked(acl.T, rhs)), margin)
+    return (x, margin), (dx, jnp.zeros_like(margin))
+
+
+# One compiled program per shape: called eagerly, the solvers' loops would otherwise each be
+# compiled and loaded as separate small executables (thousands over a test session).
+_care_jit = jax.jit(_care)
+_dare_jit = jax.jit(_dare)
 
 
 # ----------------------------------------------------------------------------- public API
@@ -291,8 +163,9 @@ def check_positive_semidefinite(name: str, m: jax.Array) -> None:
         raise ValueError(f"{name}: must be symmetric positive semi-definite, eigenvalues {w!r}")
 
 
-def prepare_riccati_inputs(a, b, q, r, names=("a", "b", "q", "r")):
-    """Shape, finiteness, symmetry and ``R ≻ 0`` checks; returns float arrays, ``q``/``r`` symmetrised."""
+def prepare_riccati_inputs(a, b, q, r, names=("a", "b", "q", "r"), *, r_definite: bool = True):
+    """Shape, finiteness and symmetry checks, and ``R ≻ 0`` (``r_definite``) or ``R ⪰ 0``; returns
+    float arrays of one dtype, ``q``/``r`` symmetrised."""
     na, nb, nq, nr = names
     a = _as_2d(na, a)
     check_square(na, a)
@@ -311,48 +184,154 @@ def prepare_riccati_inputs(a, b, q, r, names=("a", "b", "q", "r")):
         check_finite(name, v)
     check_symmetric(nq, q)
     check_symmetric(nr, r)
-    check_positive_definite(nr, r)
+    (check_positive_definite if r_definite else check_positive_semidefinite)(nr, r)
     dtype = jnp.result_type(a, b, q, r, float)
-    return a.astype(dtype), b.astype(dtype), _sym(q.astype(dtype)), _sym(r.astype(dtype))
+    return a.astype(dtype), b.astype(dtype), sym(q.astype(dtype)), sym(r.astype(dtype))
 
 
-def _raise_if_failed(x: jax.Array, what: str, names) -> None:
-    if is_concrete(x) and not bool(jnp.all(jnp.isfinite(x))):
+class RiccatiDiagnostics(NamedTuple):
+    """What a Riccati solution is worth (all scalars; jit/vmap-able).
+
+    ``relative_residual``: ``‖Res(X)‖_F / Σ‖terms‖_F``.  ``stability_margin``: continuous time the
+    smallest ``−Re λ / max(|λ|, 1e-8‖A_cl‖₂)`` over the closed loop's eigenvalues (a damping ratio,
+    scale-free), discrete time ``1 − max |λ(A_cl)|`` (positive: stable).
+    ``stabilising``: the margin is at least ``1e-5``; ``marginal``: it is not (a margin within
+    rounding of zero cannot be told from zero, so the two are exclusive) — the
+    maximal solution of a problem whose Hamiltonian (symplectic pencil) has eigenvalues on, or
+    within rounding of, the stability boundary; its closed loop is not robustly stable.
+    """
+
+    relative_residual: jax.Array
+    stability_margin: jax.Array
+    stabilising: jax.Array
+    marginal: jax.Array
+
+
+def riccati_diagnostics(x, a, b, q, r, *, discrete: bool) -> RiccatiDiagnostics:
+    """Residual and closed-loop stability margin of a CARE (``discrete=False``) or DARE solution ``x``,
+    measured on the solvers' balanced data (so they do not depend on the state units)."""
+    x, a, b, q, r = (jnp.asarray(v) for v in (x, a, b, q, r))
+    b = b.reshape(a.shape[0], -1)
+    r = r.reshape(b.shape[1], b.shape[1])
+    return _diagnostics(x, a, b, q, r, discrete)
+
+
+@partial(jax.jit, static_argnums=5)
+def _diagnostics(x, a, b, q, r, discrete: bool) -> RiccatiDiagnostics:
+    ab, bb, qb, e = _balanced(a, b, q, r)
+    xb = x * jnp.outer(jnp.exp2(e), jnp.exp2(e))  # X̃ = D X D
+    if discrete:
+        rel, margin = dare_measures(xb, ab, bb, qb, r)
+    else:
+        rel, margin = care_measures(xb, ab, gain_matrix(bb, r), qb)
+    marginal = ~(margin >= MARGINAL)  # NaN counts as marginal
+    return RiccatiDiagnostics(rel, margin, ~marginal, marginal)
+
+
+@jax.jit
+def _balanced(a, b, q, r):
+    e = balancing_exponents(a, balancing_gain(b, r), q)
+    return (*scale_problem(a, b, q, e), e)
+
+
+def _fmt(modes) -> str:
+    return ", ".join(f"{z.real:.6g}{z.imag:+.6g}j" for z in modes)
+
+
+def balanced_data(a, b, q, r) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(D⁻¹AD, D⁻¹B, DQD)`` with the solvers' balancing ``D`` (NumPy, concrete inputs): the
+    coordinates in which rank and stability thresholds mean the same whatever the state units."""
+    a, b, q, r = (jnp.asarray(v, dtype=float) for v in (a, b, q, r))
+    return tuple(np.asarray(v) for v in _balanced(a, b, q, r)[:3])
+
+
+def _pair_words(names, dual: bool) -> tuple[str, str, str]:
+    """(pair, property, how) for messages: dual problems are a filter's ``(Aᵀ, Cᵀ)``."""
+    if dual:
+        return f"({names[0]}, {names[1]})", "not detectable", f"unobservable from {names[1]}"
+    return f"({names[0]}, {names[1]})", "not stabilisable", f"uncontrollable from {names[1]}"
+
+
+def _explain_failure(a, b, q, r, what: str, names, discrete: bool, dual: bool) -> None:
+    """Raise ``ValueError`` for a failed solve, naming uncontrollable unstable modes if there are."""
+    try:
+        ab, bb, _ = balanced_data(a, b, q, r)
+    except (ValueError, np.linalg.LinAlgError):  # the diagnosis must not hide the failure itself
+        ab, bb = np.asarray(a), np.asarray(b)
+    bad = uncontrollable_modes(ab, bb, discrete=discrete)
+    if bad:
+        pair, prop, how = _pair_words(names, dual)
+        kind = "|λ| ≥ 1" if discrete else "Re λ ≥ 0"
+        raise ValueError(f"{pair}: {prop} — mode(s) {_fmt(bad)} with {kind} are {how} (PBH test on "
+                         f"the balanced pair); {what} has no stabilising solution")
+    raise ValueError(
+        f"({', '.join(names)}): {what} has no solution that could be computed — neither a stabilising "
+        "one nor a maximal one with a marginally stable closed loop (e.g. no symmetric solution "
+        f"exists for this indefinite {names[2]}, or {names[3]} + {names[1]}ᵀX{names[1]} is singular, or the "
+        "problem is too ill-conditioned)"
+    )
+
+
+def _check_concrete_result(x, a, b, q, r, what: str, names, discrete: bool, dual: bool) -> None:
+    if not is_concrete((x, a, b, q, r)):
+        return
+    if not bool(jnp.all(jnp.isfinite(x))):
+        _explain_failure(a, b, q, r, what, names, discrete, dual)
+    diag = riccati_diagnostics(x, a, b, q, r, discrete=discrete)
+    if bool(diag.marginal):
+        where = "1 − max|λ|" if discrete else "min −Re λ/|λ|"
+        warnings.warn(
+            f"({', '.join(names)}): {what}'s closed loop is only marginally stable ({where} = "
+            f"{float(diag.stability_margin):.2e}): the returned solution is the maximal one, not a "
+            "robustly stabilising one (the Hamiltonian / symplectic pencil has eigenvalues on or "
+            "within rounding of the stability boundary)", MarginalStabilityWarning, stacklevel=3)
+
+
+def check_stabilising(x, a, b, q, r, *, discrete: bool, names=("a", "b", "q", "r"), dual: bool = False) -> None:
+    """For callers that need a *stabilising* solution (LQR, Kalman gains), on concrete inputs: raise
+    ``ValueError`` when ``x`` is marginal because a mode on the stability boundary is unobservable
+    from ``q`` (``dual``: uncontrollable from the process noise) — no stabilising solution exists."""
+    if not is_concrete((x, a, b, q, r)) or not bool(riccati_diagnostics(x, a, b, q, r, discrete=discrete).marginal):
+        return
+    ab, _, qb = balanced_data(a, b, q, r)
+    bad = uncontrollable_modes(ab.T, qb, discrete=discrete, region="boundary")
+    if bad:
+        where = "unit circle" if discrete else "imaginary axis"
+        what = "not stabilisable from the process noise" if dual else "not detectable"
+        how = "uncontrollable" if dual else "unobservable"
         raise ValueError(
-            f"({', '.join(names)}): {what} has no stabilising solution that could be computed "
-            "(its Hamiltonian/symplectic pencil has eigenvalues on the stability boundary — e.g. a "
-            "mode there is unobservable from q — or the problem is too ill-conditioned)"
-        )
+            f"({names[0]}, {names[2]}): {what} — mode(s) {_fmt(bad)} on the {where} are {how} from "
+            f"{names[2]}, so no stabilising Riccati solution exists (PBH test on the balanced data)")
 
 
-def solve_continuous_are(a, b, q, r, *, names=("a", "b", "q", "r")) -> jax.Array:
-    """Stabilising solution ``X`` of ``Aᵀ X + X A − X B R⁻¹ Bᵀ X + Q = 0``.
+def solve_continuous_are(a, b, q, r, *, names=("a", "b", "q", "r"), dual: bool = False) -> jax.Array:
+    """Stabilising (else maximal) solution ``X`` of ``Aᵀ X + X A − X B R⁻¹ Bᵀ X + Q = 0``.
 
     Args:
-        a: ``(n, n)``; b: ``(n, m)``; q: ``(n, n)`` symmetric; r: ``(m, m)`` symmetric positive
-            definite (a scalar is accepted for ``m = 1``).
+        a: ``(n, n)``; b: ``(n, m)``; q: ``(n, n)`` symmetric (may be indefinite); r: ``(m, m)``
+            symmetric positive definite (a scalar is accepted for ``m = 1``).
         names: argument names used in error messages (callers such as :func:`lqr` pass theirs).
+        dual: the inputs are a filter's ``(Aᵀ, Cᵀ, W, V)``: errors speak of detectability.
 
     Returns:
-        ``X`` of shape ``(n, n)``, symmetric.  Differentiable (implicitly) in all four inputs;
-        under ``jit``/``vmap`` a failed solve gives NaN instead of an exception.
+        ``X`` of shape ``(n, n)``, symmetric.  Differentiable (implicitly) in all four inputs.
+        Concrete inputs: ``ValueError`` if no solution was found (naming uncontrollable unstable
+        modes if any); :class:`MarginalStabilityWarning` if the closed loop is only marginally
+        stable (see :func:`riccati_diagnostics`).  Under ``jit``/``vmap``: NaN instead of the error.
     """
     a, b, q, r = prepare_riccati_inputs(a, b, q, r, names)
-    if is_concrete((a, b)):
-        check_stabilizable(names[0], np.asarray(a), names[1], np.asarray(b))
-    x = _care(a, b, q, r)
-    _raise_if_failed(x, "the CARE", names)
+    x = _care_jit(a, b, q, r)[0]
+    _check_concrete_result(x, a, b, q, r, "the CARE", names, discrete=False, dual=dual)
     return x
 
 
-def solve_discrete_are(a, b, q, r, *, names=("a", "b", "q", "r")) -> jax.Array:
-    """Stabilising solution ``X`` of ``Aᵀ X A − X − Aᵀ X B (R + BᵀXB)⁻¹ Bᵀ X A + Q = 0``.
+def solve_discrete_are(a, b, q, r, *, names=("a", "b", "q", "r"), dual: bool = False) -> jax.Array:
+    """Stabilising (else maximal) solution ``X`` of ``Aᵀ X A − X − Aᵀ X B (R + BᵀXB)⁻¹ Bᵀ X A + Q = 0``.
 
-    Shapes and behaviour as :func:`solve_continuous_are` (discrete-time stability: ``|λ| < 1``).
+    Shapes and behaviour as :func:`solve_continuous_are`, except that ``r`` need only be positive
+    semi-definite (``R + BᵀXB ≻ 0`` is required at the solution); stability is ``|λ| < 1``.
     """
-    a, b, q, r = prepare_riccati_inputs(a, b, q, r, names)
-    if is_concrete((a, b)):
-        check_stabilizable(names[0], np.asarray(a), names[1], np.asarray(b), discrete=True)
-    x = _dare(a, b, q, r)
-    _raise_if_failed(x, "the DARE", names)
+    a, b, q, r = prepare_riccati_inputs(a, b, q, r, names, r_definite=False)
+    x = _dare_jit(a, b, q, r)[0]
+    _check_concrete_result(x, a, b, q, r, "the DARE", names, discrete=True, dual=dual)
     return x

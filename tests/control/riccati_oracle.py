@@ -17,6 +17,18 @@ def care_relative_residual(x, a, b, q, r):
     return np.linalg.norm(res) / scale
 
 
+def scipy_care_residual(x, a, b, q, r):
+    """The residual matrix exactly as SciPy's test suite forms it (``X A + AᵀX + Q − XB R⁻¹ BᵀX``)."""
+    xb = x @ b
+    return x @ a + a.T @ x + q - xb @ np.linalg.solve(np.atleast_2d(r), xb.T)
+
+
+def scipy_dare_residual(x, a, b, q, r):
+    """The DARE residual matrix as SciPy's test suite forms it."""
+    xa, xb = x @ a, x @ b
+    return a.T @ xa - x + q - a.T @ xb @ np.linalg.solve(r + b.T @ xb, b.T @ xa)
+
+
 def dare_closed_loop(x, a, b, r):
     k = np.linalg.solve(r + b.T @ x @ b, b.T @ x @ a)
     return a - b @ k, k

@@ -14,7 +14,7 @@ import scipy.linalg as sl
 
 from jaxsim.control.kalman_gain import discrete_kalman, kalman_bucy
 from jaxsim.control.lqr import dlqr, lqr
-from jaxsim.control.riccati import solve_continuous_are, solve_discrete_are
+from jaxsim.control.riccati import MarginalStabilityWarning, solve_continuous_are, solve_discrete_are
 
 N, M = 4, 2
 
@@ -128,13 +128,24 @@ def test_gradient_of_a_batched_cost_equals_the_sum_of_single_gradients():
 
 
 @pytest.mark.parametrize("discrete", [False, True])
-def test_gradient_of_a_failed_solve_is_nan_not_an_error_about_internals(discrete):
+def test_gradient_at_a_marginal_solution_is_nan_not_an_error_about_internals(discrete):
     # A = 0 (resp. 1) with q = 0: the only solution X = 0 leaves the mode on the stability boundary,
-    # so there is no stabilising solution; traced (grad) solves return NaN, as under jit.
+    # so there is no stabilising solution; the maximal one (X = 0) is returned with a warning, and
+    # its derivative does not exist: NaN, eagerly and under jit.
     a = jnp.array([[1.0 if discrete else 0.0]])
     solve = solve_discrete_are if discrete else solve_continuous_are
     f = lambda q: solve(a, jnp.eye(1), q, jnp.eye(1)).sum()  # noqa: E731
-    with pytest.raises(ValueError, match="no stabilising solution"):
-        f(jnp.zeros((1, 1)))
+    with pytest.warns(MarginalStabilityWarning):
+        assert abs(float(f(jnp.zeros((1, 1))))) < 1e-12
     assert np.isnan(jax.grad(f)(jnp.zeros((1, 1)))).all()
     assert np.isnan(jax.jit(jax.grad(f))(jnp.zeros((1, 1)))).all()
+
+
+def test_gradient_of_a_failed_solve_is_nan_not_an_error_about_internals():
+    # (A, B) not stabilisable: no solution at all; eager gives the error, traced solves NaN
+    a, b = jnp.diag(jnp.array([1.0, -1.0])), jnp.array([[0.0], [1.0]])
+    f = lambda q: solve_continuous_are(a, b, q, jnp.eye(1)).sum()  # noqa: E731
+    with pytest.raises(ValueError, match="not stabilisable"):
+        f(jnp.eye(2))
+    assert np.isnan(jax.grad(f)(jnp.eye(2))).all()
+    assert np.isnan(jax.jit(jax.grad(f))(jnp.eye(2))).all()
