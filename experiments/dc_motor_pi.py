@@ -71,7 +71,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         n_starts=cfg.n_starts, n_particles=cfg.n_particles, progress=progress,
         loss_label="J = ITAE + ρ·energy (rad·s²)")
     designs = tuned.designs
-    steps = stages.responses(problem, designs, y_label="θ, rad", title="prefiltered step and load step, nominal motor")
+    steps = stages.responses(problem, designs, y_label="θ, rad", title="prefiltered step, load step at 1 s")
     robust = stages.robustness(problem, designs, cfg.mc_runs, cfg.seed, y_label="θ, rad", progress=progress)
     ratio = tuned.metrics["loss_gradient"] / tuned.metrics["loss_pso"]
     return stages.merge(tuned, steps, robust, metrics={"loss_ratio_gradient_to_pso": ratio})
@@ -86,6 +86,6 @@ STUDY = Study(
     claims=[Claim("loss_ratio_gradient_to_pso", paper=1.0, rel_tol=0.01,
                   source="both tuners should find the same optimum of this two-gain problem")],
     assumptions={"motor": assumption("K = 10 rad/(V·s), T = 0.1 s", "a small PM motor; illustrative, no paper"),
-                 "loss": assumption("ITAE + 1e-2·∫u² dt", "ITAE for the transient, a little energy for finite gains")},
+                 "loss": assumption("ITAE + 1e-2·∫u² dt", "ITAE for the transient, some energy for finite gains")},
     run=run,
 )

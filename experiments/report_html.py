@@ -68,7 +68,8 @@ def _key_values(d: dict[str, Any], title: str) -> str:
 def _assumptions(d: dict[str, Any]) -> str:
     rows = [{"name": k, "value": (v or {}).get("value") if isinstance(v, dict) else v,
              "why": (v or {}).get("why", "") if isinstance(v, dict) else ""} for k, v in d.items()]
-    return f"<details open><summary>assumptions ({len(rows)})</summary>{_table(rows, ['name', 'value', 'why'])}</details>"
+    table = _table(rows, ["name", "value", "why"])
+    return f"<details open><summary>assumptions ({len(rows)})</summary>{table}</details>"
 
 
 def _verdicts(rows: list[dict[str, Any]]) -> dict[str, int]:
