@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -60,9 +59,9 @@ def trajectory_bands(problem: Any, params: Any, draws: dict[str, Any], *, channe
                      quantiles: tuple[float, ...] = (0.05, 0.5, 0.95)) -> tuple[np.ndarray, np.ndarray]:
     """``(t (N,), q (len(quantiles), N))``: percentiles over ``draws`` (a batched dict) of output
     ``channel`` of ``problem.simulate(params, draw)`` (noise from the problem's fixed key)."""
-    ys = jax.jit(jax.vmap(lambda d: problem.simulate(params, d).y[:, channel]))(draws)
-    t = problem.jitted.simulate(params).t
-    return np.asarray(t), np.asarray(jnp.quantile(ys, jnp.asarray(quantiles), axis=0))
+    tr = problem.jitted.simulate_batch(params, draws)  # compiled once per problem, for any params
+    ys = tr.y[:, :, channel]
+    return np.asarray(tr.t[0]), np.asarray(jnp.quantile(ys, jnp.asarray(quantiles), axis=0))
 
 
 def mc_bands(bands: dict[str, tuple[np.ndarray, np.ndarray]], *, y_label: str = "y", time_unit: str = "s",

@@ -282,12 +282,14 @@ class Problem:
     # ------------------------------------------------------------------ compiled functions
     @functools.cached_property
     def jitted(self) -> "Jitted":
-        """This problem's jitted ``loss``, ``evaluate``, ``simulate``, ``search_loss`` and batched
-        ``search_losses`` (compiled on first use, then reused: no recompilation per call)."""
+        """This problem's jitted ``loss``, ``evaluate``, ``simulate``, ``simulate_batch`` (one params,
+        a batched dict of draws), ``search_loss``, batched ``search_losses`` and ``value_and_grad`` of
+        the loss (compiled on first use, then reused for any params: no recompilation per call)."""
         return Jitted(
             loss=jax.jit(self.loss),
             evaluate=jax.jit(self.evaluate),
             simulate=jax.jit(self.simulate),
+            simulate_batch=jax.jit(jax.vmap(self.simulate, in_axes=(None, 0))),
             search_loss=jax.jit(self.search_loss),
             search_losses=jax.jit(jax.vmap(self.search_loss)),
             value_and_grad=jax.jit(jax.value_and_grad(self.loss)),
@@ -300,6 +302,7 @@ class Jitted(NamedTuple):
     loss: Callable
     evaluate: Callable
     simulate: Callable
+    simulate_batch: Callable
     search_loss: Callable
     search_losses: Callable
     value_and_grad: Callable

@@ -147,3 +147,8 @@ def test_bad_problems_are_refused():
         Problem("p", space, obj, _build, nominal={"K": 2.0}, uncertainty={"K": mc.Normal(2.0, -1.0)})
     with pytest.raises(ValueError, match="build: must return a Scenario"):
         Problem("p", space, obj, lambda p, d: None).loss(space.init)
+
+
+def test_monte_carlo_of_a_problem_shows_a_progress_bar_on_request(problem, capsys):
+    res = mc.monte_carlo(problem, {"gains": GAINS}, 8, 11, block_size=4, progress=True)
+    assert res.runs == 8 and "problem:pid: 100%" in capsys.readouterr().err
