@@ -52,7 +52,7 @@ from jaxsim.control import fuzzy as fz
 from jaxsim.control.fuzzy.controller import FuzzyPIDParams, fuzzy_pid_init, fuzzy_pid_step
 from jaxsim.control.fuzzy_steady_state import steady_state_error
 from jaxsim.control.stability_degree import max_stability_degree
-from jaxsim.core.metrics import soft_overshoot, step_info
+from jaxsim.core.metrics import itae_integrand, soft_overshoot, step_info
 from jaxsim.core.rollout import ClosedLoop, Timing, simulate
 from jaxsim.core.signals import Step
 from jaxsim.core.system import Controller
@@ -151,7 +151,7 @@ class Problem:
         cfg = self.cfg
         t, y, u = self.rollouts(char)
         y_final = y[:, -1]
-        itae = jnp.sum(t * jnp.abs(y - y_final[:, None]), axis=1) * cfg.dt
+        itae = jnp.sum(itae_integrand(t, y - y_final[:, None]), axis=1) * cfg.dt
         e_final = self.points[:, 0] - y_final
         bound = cfg.overshoot_max
         if smooth:

@@ -84,7 +84,7 @@ def make_metric(cfg: Config) -> Callable[[jax.Array, dict[str, Any]], dict[str, 
     def metric(key: jax.Array, p: dict[str, Any]) -> dict[str, jax.Array]:
         def acc(a, tick):
             itae, peak = a
-            return itae + tick.t * jnp.abs(tick.r[0] - tick.y[0]) * ts, jnp.maximum(peak, tick.y[0])
+            return itae + core_metrics.itae_integrand(tick.t, tick.r[0] - tick.y[0]) * ts, jnp.maximum(peak, tick.y[0])
 
         (itae, peak), _ = fold(_loop(p), jnp.zeros(2), timing, acc, (jnp.zeros(()), jnp.asarray(-jnp.inf)), key=key)
         overshoot = 100.0 * jnp.maximum(peak - 1.0, 0.0)

@@ -1,7 +1,8 @@
 """Write a :class:`~experiments.study.StudyResult` to an output folder.
 
 ``DIR/results.json`` (keys ``study``, ``config``, ``assumptions``, ``metrics``, ``tables``,
-``notes``), one CSV per table and one PNG per figure, each written atomically.  Non-finite numbers
+``notes``, and from the runner ``preset``, ``description``, ``reproduction``), one CSV per table
+(``reproduction.csv`` among them) and one PNG per figure, each written atomically.  Non-finite numbers
 in tables are written as the strings ``"inf"``, ``"-inf"``, ``"nan"`` so the JSON stays standard.
 """
 
@@ -56,8 +57,12 @@ def _csv_bytes(rows: list[dict[str, Any]]) -> bytes:
     return buf.getvalue().encode()
 
 
-def write_report(study_name: str, config: Any, result: StudyResult, out_dir: str | Path) -> Path:
+def write_report(study_name: str, config: Any, result: StudyResult, out_dir: str | Path,
+                 extra: dict[str, Any] | None = None) -> Path:
     """Write everything (files named by :func:`report_file_names`); returns the path of ``results.json``.
+
+    ``extra``: further top-level keys of ``results.json`` (the runner's ``preset``, ``description``
+    and ``reproduction``), written after ``study``.
 
     Every file is written atomically (temporary file, ``fsync``, rename), ``results.json`` last, so
     a reader never sees half a file.  The folder is created if needed; whether it may be written
@@ -72,6 +77,7 @@ def write_report(study_name: str, config: Any, result: StudyResult, out_dir: str
             raise TypeError(f"metrics[{name!r}]: must be a number, got {type(value).__name__}")
     payload = {
         "study": study_name,
+        **_plain(extra or {}),
         "config": _plain(dataclasses.asdict(config)),
         "assumptions": _plain(result.assumptions),
         "metrics": _plain(result.metrics),

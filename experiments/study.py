@@ -1,6 +1,10 @@
-"""What a study is: a config dataclass, ``run(config, progress) -> StudyResult``, and a report.
+"""The pieces a study returns (:class:`StudyResult`, :func:`assumption`, :class:`PerRun`) and the
+*old* study shape (:class:`Study` with a ``quick: bool`` config field).
 
-A study module defines ``STUDY = Study(name, description, Config, run)``; the CLI discovers it.
+New studies use :class:`experiments.runner.Study` (config + named presets + claims + assumptions);
+the runner adapts this old shape (:func:`experiments.runner.as_study`) until every study is ported.
+
+An old study module defines ``STUDY = Study(name, description, Config, run)``; the CLI discovers it.
 A study that can be swept (``python -m experiments sweep NAME``) also passes
 ``per_run=lambda config: PerRun(metric, nominal, uncertain)``: one run's metrics as a pure JAX
 function of a key and a dict of named parameters (see :class:`PerRun`).

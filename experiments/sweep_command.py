@@ -2,7 +2,7 @@
 
     python -m experiments sweep NAME --param key=lo:hi:n [--param ...] --runs N
         [--design grid|lhs|sobol] [--points M] [--seed S] [--chunk C] [--devices K]
-        [--out DIR] [--resume] [--quick] [--set k=v ...] [--keep-runs K]
+        [--out DIR] [--resume] [--preset P | --quick] [--set k=v ...] [--keep-runs K]
         [--coordinator HOST:PORT --num-processes P --process-id I]
 
 ``--devices K`` uses K devices; on a CPU it makes JAX expose K host devices
@@ -48,9 +48,9 @@ def add_parser(sub: Any) -> None:
     sw.add_argument("--devices", type=int, default=None, help="number of devices (CPU: host devices)")
     sw.add_argument("--out", default=None, help="output + checkpoint folder (default results/NAME-sweep)")
     sw.add_argument("--resume", action="store_true", help="continue the sweep already in --out")
-    sw.add_argument("--quick", action="store_true", help="the study's quick config")
-    sw.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                    help="override a config field of the study (repeatable)")
+    from experiments.cli import add_preset_arguments
+
+    add_preset_arguments(sw)
     sw.add_argument("--keep-runs", type=int, default=0, help="keep the first K runs verbatim (raw_runs.csv)")
     sw.add_argument("--coordinator", default=None, metavar="HOST:PORT", help="jax.distributed coordinator")
     sw.add_argument("--num-processes", type=int, default=None)
@@ -114,9 +114,10 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     import jax
 
     import jaxsim.montecarlo as mc
-    from experiments.config_overrides import apply_overrides
+    from experiments.cli import preset_of
     from experiments.progress import bar
     from experiments.registry import all_studies, get_study
+    from experiments.runner import as_study
     from experiments.output_folder import check_output_folder, write_marker
     from experiments.report import report_file_names, write_report
     from experiments.study import StudyResult
@@ -125,12 +126,12 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     if args.devices is not None and len(jax.devices()) < args.devices:
         raise ValueError(f"--devices: {args.devices} requested but JAX sees {len(jax.devices())} "
                          "(it was initialised before the flag could take effect)")
-    study = get_study(args.name)
+    study = as_study(get_study(args.name))
     if study.per_run is None:
         able = [n for n, s in all_studies().items() if s.per_run is not None]
         raise ValueError(f"NAME: study {study.name!r} exposes no per-run metric; studies that do: "
                          f"{', '.join(able) or 'none'}")
-    config = apply_overrides(study.default_config(quick=args.quick), args.overrides)
+    preset, config = study.resolve(preset_of(args), args.overrides)
     spec = study.per_run(config)
     design = _design(args, spec.nominal)
     space = {**spec.nominal, **spec.uncertain}
@@ -176,7 +177,7 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     study_result = StudyResult(metrics=metrics, tables=tables, figures=figures, notes=notes)
     files = report_file_names(study_result)
     write_marker(out, study.name, "sweep", files, final=False)  # listed before they exist: crash-safe
-    path = write_report(f"{study.name} (sweep)", config, study_result, out)
+    path = write_report(f"{study.name} (sweep)", config, study_result, out, {"preset": preset})
     write_marker(out, study.name, "sweep", files)  # stale files of an earlier report removed
     print(f"[{study.name}] sweep done in {wall:.1f} s ({result.chunks_computed} chunk(s) computed, "
           f"{result.chunks_loaded} loaded); wrote {path}", file=sys.stderr)

@@ -30,6 +30,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxsim.control import lqg_tracker
+from jaxsim.core.metrics import energy_integrand, itae_integrand, saturation_excess_integrand
 from jaxsim.core.pytree import replace
 from jaxsim.core.rollout import ClosedLoop, Timing, fold
 from jaxsim.core.signals import Square
@@ -157,9 +158,9 @@ class TRMSTuning:
         since_switch = jnp.mod(t - ref.t0, 0.5 * ref.period)
         u_sat = jnp.clip(u, -u_max, u_max)
         return ts * jnp.stack([
-            jnp.sum(since_switch * jnp.abs(r - y)),
-            jnp.sum((u_sat - self.u_eq) ** 2),
-            jnp.sum(jnp.maximum(jnp.abs(u) - u_max, 0.0) ** 2),
+            jnp.sum(itae_integrand(since_switch, r - y)),
+            jnp.sum(energy_integrand(u_sat, self.u_eq)),
+            jnp.sum(saturation_excess_integrand(u, u_max)),
         ])
 
     def step_loss(self, t: jax.Array, r: jax.Array, y: jax.Array, u: jax.Array, u_max: Any) -> jax.Array:

@@ -7,7 +7,9 @@ Sub-packages:
 * :mod:`jaxsim.plants` — one module per plant family of the seed papers;
 * :mod:`jaxsim.control` — controllers (PID, ...) and their design rules;
 * :mod:`jaxsim.montecarlo` — Monte Carlo and parameter sweeps: reproducible streaming statistics,
-  sharded over devices and hosts, resumable.
+  sharded over devices and hosts, resumable;
+* :mod:`jaxsim.problem` — a tuning or robustness question as one object (parameter space,
+  closed-loop builder, running-cost objective, uncertainty), shared by tuners, Monte Carlo and envs.
 
 Importing the package enables float64 (see :mod:`jaxsim.precision`).
 """

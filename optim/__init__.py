@@ -1,16 +1,16 @@
 """Tuning layer: reparametrisations, gradient tuner (optax), particle swarm, searches, comparisons.
 
-Importing ``optim`` imports ``jaxsim`` (float64 on).  CasADi/IPOPT helpers live in
-:mod:`optim.casadi_pid` (imported on demand).
+Every tuner takes a :class:`jaxsim.problem.Problem` (or, as before, a plain loss function) and
+returns one result type, :class:`TuneResult`.  Importing ``optim`` imports ``jaxsim`` (float64 on).
+CasADi/IPOPT helpers live in :mod:`optim.casadi_pid` (imported on demand).
 """
 
 import jaxsim  # noqa: F401  (precision set up in one place)
-from optim.compare import Comparison, Curve, best_within, compare, comparison_metrics, plot_comparison
-from optim.problems import PIDTuning, rastrigin, rosenbrock, sphere
-from optim.pso import PSOConfig, SwarmState, pso, pso_init, pso_step
-from optim.reparam import (
+from jaxsim.problem import Param, ParamSpace, Problem, Scenario, Sorted
+from jaxsim.problem.reparam import (
     Identity,
     Interval,
+    LogInterval,
     Positive,
     Reparam,
     Simplex,
@@ -20,17 +20,30 @@ from optim.reparam import (
     check_domain,
     invert,
 )
-from optim.results import SearchHistory, SearchResult
+from optim.compare import (
+    Comparison,
+    Curve,
+    best_within,
+    compare,
+    comparison_metrics,
+    plot_comparison,
+    standard_tuners,
+)
+from optim.problems import PIDTuning, rastrigin, rosenbrock, sphere
+from optim.pso import PSOConfig, SwarmState, pso, pso_init, pso_step
+from optim.results import History, SearchHistory, SearchResult, TuneResult
 from optim.robust import cvar, mean, robust_loss, worst_case
 from optim.search import grid_search, random_search
-from optim.tune import FORWARD_MODE_MAX_PARAMS, History, TuneResult, tune
+from optim.tune import FORWARD_MODE_MAX_PARAMS, StepInfo, Tuner, TunerState, gradient_tuner, tune
 
 __all__ = [
-    "Comparison", "Curve", "best_within", "compare", "comparison_metrics", "plot_comparison",
+    "Param", "ParamSpace", "Problem", "Scenario", "Sorted",
+    "Comparison", "Curve", "best_within", "compare", "comparison_metrics", "plot_comparison", "standard_tuners",
     "PIDTuning", "rastrigin", "rosenbrock", "sphere",
     "PSOConfig", "SwarmState", "pso", "pso_init", "pso_step",
-    "Identity", "Interval", "Positive", "Reparam", "Simplex", "SortedBreakpoints", "SPDMatrix",
+    "Identity", "Interval", "LogInterval", "Positive", "Reparam", "Simplex", "SortedBreakpoints", "SPDMatrix",
     "apply", "check_domain", "invert",
-    "SearchHistory", "SearchResult", "cvar", "mean", "robust_loss", "worst_case",
-    "grid_search", "random_search", "FORWARD_MODE_MAX_PARAMS", "History", "TuneResult", "tune",
+    "History", "SearchHistory", "SearchResult", "TuneResult", "cvar", "mean", "robust_loss", "worst_case",
+    "grid_search", "random_search", "FORWARD_MODE_MAX_PARAMS", "StepInfo", "Tuner", "TunerState",
+    "gradient_tuner", "tune",
 ]

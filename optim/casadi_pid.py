@@ -8,7 +8,7 @@ the same discrete computation, written independently, and agree to rounding; Cas
 differentiation gives an independent gradient.
 
 :func:`ipopt_tune` minimises it with IPOPT inside the box and reports a
-:class:`optim.results.SearchResult` for the comparison harness.  Simulation accounting: every
+:class:`optim.results.TuneResult` for the comparison harness.  Simulation accounting: every
 objective evaluation counts 1, every gradient evaluation 1 (a forward and an adjoint sweep, as a
 JAX ``value_and_grad`` counts in :func:`optim.tune.tune`), every exact-Hessian evaluation ``d``
 (forward-over-adjoint sweeps).  IPOPT reports those totals only, so the per-iteration counts in the
@@ -24,7 +24,7 @@ import casadi as ca
 import numpy as np
 
 from optim.problems import PIDTuning
-from optim.results import SearchHistory, SearchResult, as_box
+from optim.results import History, TuneResult, as_box
 
 
 def casadi_loss(problem: PIDTuning) -> ca.Function:
@@ -79,7 +79,7 @@ def ipopt_tune(
     tol: float = 1e-10,
     hessian: str = "limited-memory",
     print_level: int = 0,
-) -> SearchResult:
+) -> TuneResult:
     """Minimise the CasADi loss with IPOPT from ``x0`` inside ``[lo, hi]`` (default: the problem's box).
 
     ``hessian``: ``"limited-memory"`` (L-BFGS, gradients only) or ``"exact"``.  ``compile_s`` is
@@ -153,13 +153,14 @@ def ipopt_tune(
     objs = np.array([v for _, v in trace]) if trace else np.array([float(sol["f"])])
     best = np.minimum.accumulate(objs)
     sims = np.round(np.arange(1, len(best) + 1) * n_sims / len(best)).astype(int)
-    return SearchResult(
-        x=np.asarray(sol["x"], float).ravel(),
+    return TuneResult(
+        params=np.asarray(sol["x"], float).ravel(),
         loss=float(sol["f"]),
-        history=SearchHistory(best, sims, times),
+        history=History(best, sims, times, loss=objs),
         n_sims=n_sims,
         wall_s=float(wall),
         compile_s=float(compile_s),
+        converged=stats.get("return_status") in ("Solve_Succeeded", "Solved_To_Acceptable_Level"),
         message=f"IPOPT: {stats.get('return_status', '?')} after {stats.get('iter_count', '?')} iterations "
                 f"({n_f} f, {n_grad} gradient, {n_hess} Hessian evaluations)",
     )

@@ -1,11 +1,13 @@
 """Comparison harness: several tuners on one loss, their best-so-far curves, a table and a plot.
 
-``compare({"gradient": lambda: tune(...), "pso": lambda: pso(...), ...})`` runs each tuner once and
-reads its history (:class:`optim.tune.TuneResult` and :class:`optim.results.SearchResult` both
-carry ``best_loss``, ``sims`` and ``wall_s`` per step or iteration).  Equal budgets are the caller's
-job (give every tuner the same number of simulations); the harness reports what each used and, for
-the equal-budget view, the best loss each tuner had reached by the smallest budget any of them
-used — of simulations (``loss_at_common_sims``) and of seconds (``loss_at_common_seconds``).
+``compare(problem, tuners=("gradient", "pso", "random"), budget=640)`` gives each standard tuner
+(:func:`standard_tuners`) the same budget of simulations on a :class:`~jaxsim.problem.Problem`;
+``compare({"gradient": lambda: tune(...), "pso": lambda: pso(...), ...})`` runs any zero-argument
+callables.  Each tuner runs once and its history is read (every tuner returns
+:class:`optim.results.TuneResult`, with ``best_loss``, ``sims`` and ``wall_s`` per step).  The
+harness reports what each used and, for the equal-budget view, the best loss each tuner had
+reached by the smallest budget any of them used — of simulations (``loss_at_common_sims``) and of
+seconds (``loss_at_common_seconds``).
 
 A study that tunes puts ``Comparison.rows`` in its tables, :func:`comparison_metrics` in its metrics
 and :func:`plot_comparison` in its figures (see ``experiments/pid_tuning_comparison.py``).
@@ -14,9 +16,15 @@ and :func:`plot_comparison` in its figures (see ``experiments/pid_tuning_compari
 from __future__ import annotations
 
 import time
-from typing import Any, Callable, NamedTuple
+from typing import Any, Callable, NamedTuple, Sequence
 
+import jax
 import numpy as np
+import optax
+
+from jaxsim.problem import Problem
+
+STANDARD_TUNERS = ("gradient", "pso", "random", "grid")
 
 
 class Curve(NamedTuple):
@@ -47,22 +55,82 @@ def best_within(curve: Curve, *, sims: float | None = None, seconds: float | Non
     return float(np.min(curve.best_loss[ok])) if np.any(ok) else float("inf")
 
 
-def _params_of(result: Any) -> Any:
-    x = getattr(result, "params", None)
-    if x is None:
-        x = getattr(result, "x", None)
+def _params_of(result: Any, problem: Problem | None = None) -> Any:
+    x = result.params
+    if problem is not None and isinstance(x, dict):
+        try:
+            return problem.space.flat(x)
+        except (KeyError, TypeError, ValueError):
+            pass
     try:
-        return np.asarray(x, float).ravel().tolist()
+        return np.concatenate([np.ravel(np.asarray(v, float)) for v in jax.tree_util.tree_leaves(x)]).tolist()
     except (TypeError, ValueError):
         return str(x)
 
 
-def compare(runs: dict[str, Callable[[], Any]],
-            on_done: Callable[[str], Any] | None = None) -> Comparison:
-    """Run each tuner (a zero-argument callable returning a TuneResult or SearchResult).
+def standard_tuners(problem: Problem, budget: int, names: Sequence[str] = ("gradient", "pso", "random"), *,
+                    key: Any = None, learning_rate: float = 0.05, n_starts: int = 4, init_spread: float = 1.0,
+                    n_particles: int = 32, batch_size: int = 256, progress: Any = False) -> dict[str, Callable[[], Any]]:
+    """Zero-argument runs of the standard tuners on ``problem``, each given ``budget`` simulations.
 
+    * ``gradient``: :func:`optim.tune`, Adam(``learning_rate``) in the space's reparametrisation,
+      ``n_starts`` starts (start 0 at ``space.init``, the others spread by ``init_spread``),
+      ``budget // (n_starts·S)`` steps (``S`` = scenarios per loss evaluation);
+    * ``pso``: :func:`optim.pso`, ``n_particles`` particles, ``budget // (n_particles·S)`` iterations;
+    * ``random``: :func:`optim.random_search`, ``budget // S`` points (batches of ``batch_size``);
+    * ``grid``: :func:`optim.grid_search`, ``⌊(budget/S)^{1/d}⌋`` points per dimension.
+
+    ``key``: PRNG key of the gradient starts, the swarm and the random points (default ``PRNGKey(0)``).
+    """
+    from optim.pso import pso
+    from optim.search import grid_search, random_search
+    from optim.tune import tune
+
+    if isinstance(budget, bool) or not isinstance(budget, (int, np.integer)) or budget < 1:
+        raise ValueError(f"budget: must be a positive integer number of simulations, got {budget!r}")
+    key = jax.random.PRNGKey(0) if key is None else key
+    evals = int(budget) // problem.sims_per_eval
+    d = problem.space.dim
+    makers = {
+        "gradient": lambda: tune(problem, optimizer=optax.adam(learning_rate), steps=evals // n_starts,
+                                 n_starts=n_starts, key=key, init_spread=init_spread, progress=progress),
+        "pso": lambda: pso(problem, n_particles=n_particles, n_iters=evals // n_particles, key=key, progress=progress),
+        "random": lambda: random_search(problem, n=evals, key=key, batch_size=batch_size),
+        "grid": lambda: grid_search(problem, points_per_dim=int(np.floor(evals ** (1 / d) + 1e-9)),
+                                    batch_size=batch_size),
+    }
+    unknown = [n for n in names if n not in makers]
+    if unknown:
+        raise ValueError(f"tuners: unknown standard tuner(s) {unknown}; known: {', '.join(makers)}")
+    too_small = {"gradient": evals < n_starts, "pso": evals < n_particles, "random": evals < 1, "grid": evals < 1}
+    small = [n for n in names if too_small[n]]
+    if small:
+        raise ValueError(f"budget: {budget} simulations ({evals} loss evaluations of {problem.sims_per_eval} "
+                         f"scenario(s)) is too small for {', '.join(small)}")
+    return {n: makers[n] for n in names}
+
+
+def compare(runs: dict[str, Callable[[], Any]] | Problem,
+            on_done: Callable[[str], Any] | None = None, *, tuners: Sequence[str] | dict[str, Any] | None = None,
+            budget: int | None = None, **options: Any) -> Comparison:
+    """Run each tuner once and collect its best-so-far curve.
+
+    ``runs``: name → zero-argument callable returning a :class:`~optim.results.TuneResult`; or a
+    :class:`~jaxsim.problem.Problem`, with ``tuners`` (standard names, see :func:`standard_tuners`,
+    or a dict name → ``None`` for a standard tuner or a callable ``(problem, budget) -> TuneResult``)
+    each given ``budget`` simulations; ``options`` go to :func:`standard_tuners`.
     ``on_done(name)`` is called after each tuner finishes (e.g. a progress bar's update).
     """
+    problem = runs if isinstance(runs, Problem) else None
+    if problem is not None:
+        if budget is None:
+            raise ValueError("budget: required when comparing tuners on a Problem (simulations per tuner)")
+        spec = dict.fromkeys(("gradient", "pso", "random")) if tuners is None else (
+            dict(tuners) if isinstance(tuners, dict) else dict.fromkeys(tuners))
+        standard = standard_tuners(problem, budget, [n for n, v in spec.items() if v is None], **options)
+        runs = {n: standard[n] if v is None else (lambda v=v: v(problem, budget)) for n, v in spec.items()}
+    elif tuners is not None or budget is not None or options:
+        raise ValueError("tuners/budget: only for a Problem; with a dict of runs each run sets its own budget")
     if not runs:
         raise ValueError("runs: need at least one tuner")
     curves, results, rows = {}, {}, []
@@ -81,7 +149,8 @@ def compare(runs: dict[str, Callable[[], Any]],
         rows.append({
             "tuner": name, "best_loss": float(res.loss), "sims": int(res.n_sims),
             "wall_s": float(res.wall_s), "compile_s": float(getattr(res, "compile_s", 0.0)),
-            "total_s": total, "params": _params_of(res), "message": getattr(res, "message", ""),
+            "total_s": total, "params": _params_of(res, problem), "converged": bool(getattr(res, "converged", False)),
+            "message": getattr(res, "message", ""),
         })
     common_sims = min(float(c.sims[-1]) for c in curves.values())
     common_s = min(float(c.seconds[-1]) for c in curves.values())
@@ -107,11 +176,13 @@ def comparison_metrics(comparison: Comparison) -> dict[str, float]:
     return out
 
 
-def plot_comparison(comparison: Comparison, *, reference: float | None = None, title: str | None = None):
+def plot_comparison(comparison: Comparison, *, reference: float | None = None, title: str | None = None,
+                    loss_label: str = "loss"):
     """Figure with best loss vs simulations and vs seconds, one line per tuner.
 
     With ``reference`` (e.g. a known optimum) the curves show ``best − reference`` on a log scale
-    (gaps below ``1e-15·|reference|`` are drawn at that floor).
+    (gaps below ``1e-15·|reference|`` are drawn at that floor).  ``loss_label`` names the loss and
+    its unit on the y axis (e.g. ``"J = ITAE + ρ·energy, s²"``).
     """
     import matplotlib.pyplot as plt
 
@@ -129,7 +200,7 @@ def plot_comparison(comparison: Comparison, *, reference: float | None = None, t
     axes[0].set_xlabel("simulations")
     axes[1].set_xlabel("wall time, s (compile excluded)")
     axes[1].set_xscale("log")
-    ylabel = "best loss − reference" if reference is not None else "best loss"
+    ylabel = f"best {loss_label} − reference" if reference is not None else f"best {loss_label}"
     axes[0].set_ylabel(ylabel)
     axes[0].legend()
     fig.suptitle(title or "tuners on equal simulation budgets")

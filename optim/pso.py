@@ -19,7 +19,9 @@ positions are uniform in the box, initial velocities uniform in ``±velocity_cla
 (or ``±(hi − lo)`` without clamp).
 
 :func:`pso_init` / :func:`pso_step` are the pure pair; :func:`pso` drives them (a few iterations
-per jitted call) and records the best loss, simulations and wall time per iteration.
+per jitted call) and records the best loss, simulations and wall time per iteration.  Given a
+:class:`~jaxsim.problem.Problem`, the swarm flies over the problem's box (``space.box``, search
+coordinates) on its penalised loss.
 """
 
 from __future__ import annotations
@@ -33,7 +35,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from optim.results import SearchHistory, SearchResult, as_box, check_int, check_some_loss_finite
+from jaxsim.core.progress import postfix, progress_bar
+from jaxsim.problem import Problem
+from optim.results import History, TuneResult, as_box, check_int, check_some_loss_finite
 
 Topology = Literal["global", "ring"]
 BoundMode = Literal["reflect", "clip", "absorb"]
@@ -142,6 +146,13 @@ def pso_step(losses_of: Callable[[jax.Array], jax.Array], state: SwarmState, lo:
 
     Returns the new state and the best loss found so far.
     """
+    new, best, _ = _step(losses_of, state, lo, hi, cfg)
+    return new, best
+
+
+def _step(losses_of: Callable[[jax.Array], jax.Array], state: SwarmState, lo: jax.Array, hi: jax.Array,
+          cfg: PSOConfig) -> tuple[SwarmState, jax.Array, jax.Array]:
+    """:func:`pso_step`, also returning the lowest loss of this iteration's positions."""
     losses = losses_of(state.position)
     losses = jnp.where(jnp.isfinite(losses), losses, jnp.inf)
     improved = losses < state.pbest_loss
@@ -160,15 +171,20 @@ def pso_step(losses_of: Callable[[jax.Array], jax.Array], state: SwarmState, lo:
         vel = jnp.clip(vel, -vmax, vmax)
     pos, vel = handle_bounds(state.position + vel, vel, lo, hi, cfg.bounds)
     new = SwarmState(pos, vel, pbest_pos, pbest_loss, key, state.iteration + 1)
-    return new, jnp.min(pbest_loss)
+    return new, jnp.min(pbest_loss), jnp.min(losses)
 
 
 @functools.partial(jax.jit, static_argnames=("loss", "batched", "cfg", "chunk"))
 def _jitted_steps(state: SwarmState, lo: jax.Array, hi: jax.Array, *, loss: Callable, batched: bool,
-                  cfg: PSOConfig, chunk: int) -> tuple[SwarmState, jax.Array]:
+                  cfg: PSOConfig, chunk: int) -> tuple[SwarmState, tuple[jax.Array, jax.Array]]:
     """``chunk`` iterations in one call (a scan); compiled once per (loss, settings), reused."""
     losses_of = loss if batched else jax.vmap(loss)
-    return jax.lax.scan(lambda s, _: pso_step(losses_of, s, lo, hi, cfg), state, None, length=chunk)
+
+    def body(s, _):
+        new, best, now = _step(losses_of, s, lo, hi, cfg)
+        return new, (best, now)
+
+    return jax.lax.scan(body, state, None, length=chunk)
 
 
 def _chunk_size(n_iters: int, iters_per_call: int) -> int:
@@ -176,10 +192,26 @@ def _chunk_size(n_iters: int, iters_per_call: int) -> int:
     return max(c for c in range(1, min(iters_per_call, n_iters) + 1) if n_iters % c == 0)
 
 
+def swarm_convergence(state: SwarmState, best: np.ndarray, lo: np.ndarray, hi: np.ndarray, tol: float,
+                      patience: int | None, rtol: float = 1e-12) -> tuple[bool, str]:
+    """``(converged, why)``: the personal bests collapsed (spread ``max_i (max − min)/(hi − lo) < tol``
+    over every dimension) or the best loss did not improve by more than ``rtol`` (relative) over
+    the last ``patience`` iterations."""
+    pb = np.asarray(state.pbest_position)
+    spread = float(np.max((pb.max(axis=0) - pb.min(axis=0)) / (np.asarray(hi) - np.asarray(lo))))
+    if spread < tol:
+        return True, f"swarm collapsed (personal-best spread {spread:.3g} of the box < tol={tol:g})"
+    if patience is not None and best.size > patience:
+        before, now = float(best[-patience - 1]), float(best[-1])
+        if not now < before - rtol * abs(before):
+            return True, f"no improvement over the last {patience} iterations (spread {spread:.3g} of the box)"
+    return False, f"not converged: personal-best spread {spread:.3g} of the box (tol={tol:g})"
+
+
 def pso(
-    loss: Callable[[jax.Array], jax.Array],
-    lo: Any,
-    hi: Any,
+    loss: Problem | Callable[[jax.Array], jax.Array],
+    lo: Any = None,
+    hi: Any = None,
     *,
     n_particles: int = 64,
     n_iters: int = 100,
@@ -191,28 +223,51 @@ def pso(
     c2: float = 1.5,
     bounds: BoundMode = "reflect",
     velocity_clamp: float | None = 0.5,
-    sims_per_eval: int = 1,
+    sims_per_eval: int | None = None,
     batched: bool = False,
     iters_per_call: int = 10,
-) -> SearchResult:
-    """Minimise ``loss(x)`` over the box ``lo ≤ x ≤ hi`` (``(d,)`` each) with a particle swarm.
+    tol: float = 1e-6,
+    patience: int | None = None,
+    progress: Any = False,
+) -> TuneResult:
+    """Minimise a :class:`~jaxsim.problem.Problem` over its box, or ``loss(x)`` over ``lo ≤ x ≤ hi``
+    (``(d,)`` each), with a particle swarm.
 
-    ``loss`` maps one point ``(d,)`` to a scalar and is ``vmap``ped over the swarm — one call per
-    iteration (``batched=True``: ``loss`` already maps ``(n, d)`` to ``(n,)``).  ``key`` defaults
-    to ``PRNGKey(0)``.  Simulations: ``n_particles·sims_per_eval`` per iteration.
+    A Problem is searched in its space's search coordinates (``space.box``) on its penalised loss
+    (:meth:`~jaxsim.problem.Problem.search_loss`); the result's ``params`` is the params dict and
+    ``u`` the search point.  A plain ``loss`` maps one point ``(d,)`` to a scalar and is ``vmap``ped
+    over the swarm — one call per iteration (``batched=True``: ``loss`` already maps ``(n, d)`` to
+    ``(n,)``).  ``key`` defaults to ``PRNGKey(0)``.  Simulations: ``n_particles·sims_per_eval`` per
+    iteration (``sims_per_eval`` default 1, a Problem's number of scenarios).
 
     The host syncs every ``iters_per_call`` iterations (rounded down to a divisor of ``n_iters``);
     the wall time of the iterations inside one call is interpolated linearly (they cost the same).
+    The swarm always runs ``n_iters`` iterations (equal budgets); ``converged`` reports
+    :func:`swarm_convergence` (``tol``, ``patience``) at the end.  ``progress``: ``True`` for a tqdm
+    bar, or a bar factory (:mod:`jaxsim.core.progress`).
 
     Raises ``ValueError`` ("loss: not finite (NaN/inf) at any evaluated point …", the error
     :func:`optim.tune.tune` raises too) when no particle ever saw a finite loss.
     """
+    problem = loss if isinstance(loss, Problem) else None
+    if problem is not None:
+        if lo is not None or hi is not None:
+            raise ValueError("lo/hi: a Problem brings its own box (problem.space.box)")
+        lo, hi = problem.space.box
+        loss = problem.search_loss
+        sims_per_eval = problem.sims_per_eval if sims_per_eval is None else sims_per_eval
+    elif lo is None or hi is None:
+        raise ValueError("lo/hi: required for a plain loss function (a Problem brings space.box)")
     lo, hi = as_box(lo, hi)
     if isinstance(inertia, list):
         inertia = tuple(inertia)
     cfg = PSOConfig(n_particles=n_particles, n_iters=n_iters, topology=topology, neighbors=neighbors,
                     inertia=inertia, c1=c1, c2=c2, bounds=bounds, velocity_clamp=velocity_clamp)
-    sims_per_eval = check_int("sims_per_eval", sims_per_eval)
+    sims_per_eval = check_int("sims_per_eval", 1 if sims_per_eval is None else sims_per_eval)
+    if patience is not None:
+        patience = check_int("patience", patience)
+    if not (np.isfinite(tol) and tol > 0):
+        raise ValueError(f"tol: must be finite and positive, got {tol!r}")
     if not callable(loss):
         raise ValueError(f"loss: must be callable, got {type(loss).__name__}")
     chunk = _chunk_size(cfg.n_iters, check_int("iters_per_call", iters_per_call))
@@ -221,26 +276,40 @@ def pso(
     state = pso_init(jax.random.PRNGKey(0) if key is None else key, lo, hi, cfg)
     _jitted_steps.lower(state, lo, hi, **static).compile()  # cached by jit for the loop below
     compile_s = time.perf_counter() - t0
-    best, wall = np.empty(cfg.n_iters), np.empty(cfg.n_iters)
+    best, now_min, wall = np.empty(cfg.n_iters), np.empty(cfg.n_iters), np.empty(cfg.n_iters)
+    name = problem.name if problem is not None else "loss"
+    bar = progress_bar(progress, total=cfg.n_iters, desc=f"pso {name}", unit="iter")
     start, last = time.perf_counter(), 0.0
-    for i in range(0, cfg.n_iters, chunk):
-        state, best_i = _jitted_steps(state, lo, hi, **static)
-        best[i:i + chunk] = np.asarray(best_i)
-        now = time.perf_counter() - start
-        wall[i:i + chunk] = last + (now - last) * np.arange(1, chunk + 1) / chunk
-        last = now
+    try:
+        for i in range(0, cfg.n_iters, chunk):
+            state, (best_i, now_i) = _jitted_steps(state, lo, hi, **static)
+            best[i:i + chunk] = np.asarray(best_i)
+            now_min[i:i + chunk] = np.asarray(now_i)
+            now = time.perf_counter() - start
+            wall[i:i + chunk] = last + (now - last) * np.arange(1, chunk + 1) / chunk
+            last = now
+            bar.update(chunk)
+            postfix(bar, f"best {best[i + chunk - 1]:.6g}")
+    finally:
+        bar.close()
     check_some_loss_finite(best[-1], f"{cfg.n_particles} particles × {cfg.n_iters} iterations",
                            "check the loss over the box lo..hi")
     i_best = int(jnp.argmin(state.pbest_loss))
+    z_best = state.pbest_position[i_best]
     n_sims = cfg.n_particles * cfg.n_iters * sims_per_eval
     sims = cfg.n_particles * sims_per_eval * np.arange(1, cfg.n_iters + 1)
-    message = f"{cfg.n_iters} iterations of {cfg.n_particles} particles ({cfg.topology} topology)"
-    return SearchResult(
-        x=state.pbest_position[i_best],
+    converged, why = swarm_convergence(state, best, np.asarray(lo), np.asarray(hi), tol, patience)
+    message = f"{cfg.n_iters} iterations of {cfg.n_particles} particles ({cfg.topology} topology); {why}"
+    return TuneResult(
+        params=problem.space.from_search(z_best) if problem is not None else z_best,
         loss=float(state.pbest_loss[i_best]),
-        history=SearchHistory(best, sims, wall),
+        history=History(best, sims, wall, loss=now_min),
         n_sims=int(n_sims),
         wall_s=float(wall[-1]),
         compile_s=float(compile_s),
+        converged=converged,
         message=message,
+        u=z_best,
+        n_steps=cfg.n_iters,
+        mode="pso",
     )

@@ -1,4 +1,4 @@
-"""Results of the gradient-free searches (particle swarm, random, grid) and their box checks."""
+"""The result type every tuner returns (:class:`TuneResult`, :class:`History`) and the shared argument checks."""
 
 from __future__ import annotations
 
@@ -7,31 +7,70 @@ from typing import Any, NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from optim.reparam import check_bounds
+from jaxsim.problem.reparam import check_bounds
 
 
-class SearchHistory(NamedTuple):
-    """Per iteration (swarm iteration, or batch of a random/grid search), NumPy arrays ``(T,)``.
+class History(NamedTuple):
+    """Per step (tuner step, swarm iteration, or batch of a random/grid search), NumPy arrays.
 
-    best_loss: best loss found so far; sims: cumulative simulations; wall_s: cumulative seconds.
+    best_loss ``(T,)``: loss of the best point kept so far; sims ``(T,)``: cumulative simulations;
+    wall_s ``(T,)``: cumulative seconds since the first step (compilation excluded); loss ``(T,)``:
+    the lowest loss evaluated at that step (over the running starts, the swarm, the batch).
+    Gradient tuner only (``None`` otherwise): grad_norm ``(T,)`` of the start giving ``loss``, in
+    unconstrained coordinates; loss_per_start, grad_norm_per_start, violation_per_start ``(T, S)``.
     """
 
     best_loss: np.ndarray
     sims: np.ndarray
     wall_s: np.ndarray
+    loss: np.ndarray | None = None
+    grad_norm: np.ndarray | None = None
+    loss_per_start: np.ndarray | None = None
+    grad_norm_per_start: np.ndarray | None = None
+    violation_per_start: np.ndarray | None = None
 
 
-class SearchResult(NamedTuple):
-    """Outcome of a search: best point ``x`` ``(d,)``, its ``loss``, the history, simulations used,
-    seconds of searching (setup and compilation excluded, reported as ``compile_s``), a message."""
+class TuneResult(NamedTuple):
+    """What every tuner and search returns.
 
-    x: Any
+    params: the best point (the params pytree of a Problem, or ``params0``'s structure for
+    :func:`optim.tune`, or the point ``(d,)`` of a search over a plain box); loss: its loss (without
+    penalty terms for the gradient tuner; the searches' penalised loss); history: :class:`History`;
+    n_sims: simulations used; wall_s: seconds of stepping (compile excluded); compile_s: setup and
+    compilation; converged: whether the tuner's convergence test was met (``tune``: gradient norm or
+    relative improvement; ``pso``: swarm collapsed or no improvement for ``patience`` iterations;
+    random and grid search have none: ``False``), not merely that the budget ran out; message: why
+    it stopped.  Gradient tuner only: start_index (the start that found ``params``), constraint_violation
+    ``Σ max(0, g)`` at ``params``, multipliers (augmented Lagrangian), n_steps, mode ("forward" /
+    "reverse").  u: the point in the tuner's own coordinates (unconstrained for ``tune``, search
+    coordinates for the searches).
+    """
+
+    params: Any
     loss: float
-    history: SearchHistory
+    history: History
     n_sims: int
     wall_s: float
     compile_s: float = 0.0
+    converged: bool = False
     message: str = ""
+    start_index: int = 0
+    u: Any = None
+    constraint_violation: float = 0.0
+    multipliers: Any = None
+    n_steps: int = 0
+    mode: str = ""
+
+    @property
+    def x(self) -> Any:
+        """Deprecated alias of :attr:`params` (the searches' old name for the best point)."""
+        return self.params
+
+
+SearchHistory = History
+"""Deprecated alias: the searches now return :class:`History`."""
+SearchResult = TuneResult
+"""Deprecated alias: every tuner returns :class:`TuneResult`."""
 
 
 def as_box(lo: Any, hi: Any) -> tuple[jnp.ndarray, jnp.ndarray]:

@@ -1,12 +1,9 @@
-"""Robust objectives over Monte-Carlo samples: mean, worst case, conditional value-at-risk.
+"""Robust objectives over Monte-Carlo samples.
 
-A reducer maps the losses of one parameter set over ``S`` samples, shape ``(S,)``, to a scalar;
-:func:`robust_loss` builds ``params -> reducer(vmap(loss_fn)(params, samples))``.
-
-CVaR at level ``alpha`` (Rockafellar–Uryasev) is the mean of the worst ``1 − alpha`` fraction of
-the losses, ``min_t t + E[(L − t)₊]/(1 − alpha)``; for ``S`` samples the boundary sample enters with
-a fractional weight, so the value is continuous in ``alpha``: ``alpha = 0`` gives the mean and
-``alpha → 1`` the worst case.
+:func:`robust_loss` builds ``params -> reducer(vmap(loss_fn)(params, samples))``; given a
+:class:`~jaxsim.problem.Problem` it returns :meth:`Problem.robust` (the loss over ``n`` fixed draws of
+the problem's uncertainty).  The reducers (:func:`mean`, :func:`worst_case`, :func:`cvar`) live in
+:mod:`jaxsim.problem.reducers` and are re-exported here.
 """
 
 from __future__ import annotations
@@ -16,43 +13,39 @@ from typing import Any, Callable
 import jax
 import jax.numpy as jnp
 
+from jaxsim.problem import Problem
+from jaxsim.problem.reducers import cvar, mean, worst_case
 
-def mean(losses: jax.Array) -> jax.Array:
-    """Average loss over the samples (axis 0)."""
-    return jnp.mean(losses, axis=0)
-
-
-def worst_case(losses: jax.Array) -> jax.Array:
-    """Largest loss over the samples (axis 0); its gradient is that of the worst sample."""
-    return jnp.max(losses, axis=0)
-
-
-def cvar(losses: jax.Array, alpha: float = 0.9) -> jax.Array:
-    """Mean of the worst ``1 − alpha`` fraction of ``losses`` ``(S,)``; ``0 ≤ alpha < 1``."""
-    a = float(alpha)
-    if not 0.0 <= a < 1.0:
-        raise ValueError(f"alpha: must satisfy 0 <= alpha < 1, got {alpha!r}")
-    losses = jnp.asarray(losses)
-    n = losses.shape[0]
-    worst_first = -jnp.sort(-losses, axis=0)
-    tail = (1.0 - a) * n  # number of samples, possibly fractional, in the tail
-    # weight of the i-th worst sample: the part of [i, i+1) that lies inside [0, tail)
-    idx = jnp.arange(n, dtype=losses.dtype)
-    w = jnp.clip(tail - idx, 0.0, 1.0)
-    w = w.reshape((n,) + (1,) * (losses.ndim - 1))
-    return jnp.sum(w * worst_first, axis=0) / tail
+__all__ = ["cvar", "mean", "robust_loss", "worst_case"]
 
 
 def robust_loss(
-    loss_fn: Callable[[Any, Any], jax.Array],
-    samples: Any,
+    loss_fn: Callable[[Any, Any], jax.Array] | Problem,
+    samples: Any = None,
     reducer: Callable[[jax.Array], jax.Array] = mean,
-) -> Callable[[Any], jax.Array]:
+    *,
+    n: int | None = None,
+    key: Any = 0,
+) -> Callable[[Any], jax.Array] | Problem:
     """``params -> reducer(losses)`` with ``losses[s] = loss_fn(params, samples[s])``.
 
     ``samples`` is a pytree whose leaves share a leading sample axis (scenarios, plant-parameter
     draws, noise keys); the samples are evaluated in one ``vmap``.
+
+    Given a :class:`~jaxsim.problem.Problem`, returns a Problem (which every tuner takes): with
+    ``samples`` (a dict of draws), the problem over those scenarios; otherwise
+    ``problem.robust(n, key, reducer)``, ``n`` fixed draws of its uncertainty.
     """
+    if isinstance(loss_fn, Problem):
+        if samples is not None:
+            if not isinstance(samples, dict):
+                raise ValueError("samples: for a Problem, a dict of draws with a leading scenario axis")
+            return loss_fn.replace(scenarios=dict(samples), reduce=reducer)
+        if n is None:
+            raise ValueError("n: give the number of draws of the problem's uncertainty (or samples)")
+        return loss_fn.robust(n, key, reducer)
+    if samples is None:
+        raise ValueError("samples: required for a loss function")
     leaves = jax.tree_util.tree_leaves(samples)
     if not leaves:
         raise ValueError("samples: must contain at least one array with a leading sample axis")

@@ -1,6 +1,9 @@
-"""Gradient tuner: ``tune(loss, params0, ...)`` with any optax optimiser.
+"""Gradient tuner: ``tune(problem, ...)`` (or ``tune(loss, params0, ...)``) with any optax optimiser.
 
-The tuner works in unconstrained space: ``x = apply(reparam, u)`` (see :mod:`optim.reparam`), so
+:func:`gradient_tuner` is the optax-like pure pair ``(init, step)`` (a user may own the loop);
+:func:`tune` is that pair plus the host loop (history, early stopping, callback, progress bar).
+
+The tuner works in unconstrained space: ``x = apply(reparam, u)`` (see :mod:`jaxsim.problem.reparam`), so
 bounds, positivity and orderings hold at every step.  General inequality constraints
 ``g(x) ≤ 0`` (``constraints(x)`` returns ``g``, any shape) enter the objective in ``u``-space as
 
@@ -12,7 +15,10 @@ bounds, positivity and orderings hold at every step.  General inequality constra
 
 Several starts (``n_starts``; start 0 is ``params0``, the others ``u0 + init_spread·N(0, 1)``) step
 together in one ``vmap``; every step is one jitted call, after which the host records the history,
-checks early stopping and calls ``callback``.
+checks early stopping and calls ``callback``.  A start *converges* (and stops) when its gradient
+norm falls to ``gtol`` or its kept point has not improved by ``rtol`` (relative) for ``patience``
+steps; ``TuneResult.converged`` says whether the start returned did, as opposed to running out of
+steps, and ``message`` gives the last gradient norm.
 
 Which point is kept: the evaluated iterate with the lowest objective — without constraints the
 loss; with ``"penalty"`` the penalised loss (the problem being solved); with
@@ -44,9 +50,11 @@ import numpy as np
 import optax
 from jax.flatten_util import ravel_pytree
 
+from jaxsim.core.progress import postfix, progress_bar
 from jaxsim.core.validation import check_finite
-from optim.reparam import apply, check_domain, invert
-from optim.results import check_int, check_some_loss_finite
+from jaxsim.problem import Problem
+from jaxsim.problem.reparam import apply, check_domain, invert
+from optim.results import History, TuneResult, check_int, check_some_loss_finite
 
 FORWARD_MODE_MAX_PARAMS = 32
 """``mode="auto"`` uses forward mode up to this many unconstrained parameters.
@@ -60,53 +68,12 @@ Mode = Literal["auto", "forward", "reverse"]
 ConstraintMethod = Literal["penalty", "augmented_lagrangian"]
 
 
-class History(NamedTuple):
-    """Per-step record (``T`` steps run, ``S`` starts), NumPy arrays.
+class TunerState(NamedTuple):
+    """State of :func:`gradient_tuner` (every leaf has a leading axis of ``S`` starts): current point
+    ``u`` (unconstrained), optimiser state, multipliers, the best point kept so far and its
+    ``(loss, violation, merit)``, per-start flags (``alive``: no NaN/inf seen; ``active``: not
+    stopped by the convergence test), steps since the last improvement, step counter."""
 
-    loss ``(T,)``: lowest current loss over the running starts; best_loss ``(T,)``: loss of the
-    best point kept so far (see the module docstring); grad_norm ``(T,)``: gradient norm in
-    ``u``-space of the start giving ``loss``; sims ``(T,)``: cumulative simulations; wall_s
-    ``(T,)``: cumulative seconds since the first step; loss_per_start, grad_norm_per_start,
-    violation_per_start ``(T, S)``.
-    """
-
-    loss: np.ndarray
-    best_loss: np.ndarray
-    grad_norm: np.ndarray
-    sims: np.ndarray
-    wall_s: np.ndarray
-    loss_per_start: np.ndarray
-    grad_norm_per_start: np.ndarray
-    violation_per_start: np.ndarray
-
-
-class TuneResult(NamedTuple):
-    """Outcome of :func:`tune`.
-
-    params: best point (pytree like ``params0``); loss: its loss (without penalty terms);
-    history: :class:`History`; n_sims: simulations used; wall_s: seconds of stepping (compile
-    excluded); message: why it stopped; start_index: the start that found ``params``;
-    u: ``params`` in unconstrained space; constraint_violation: ``Σ max(0, g)`` at ``params``
-    (0 without constraints); multipliers: final augmented-Lagrangian multipliers of that start
-    (``None`` otherwise); compile_s: compile time; n_steps: steps run; mode: gradient mode used.
-    """
-
-    params: Any
-    loss: float
-    history: History
-    n_sims: int
-    wall_s: float
-    message: str
-    start_index: int
-    u: Any = None
-    constraint_violation: float = 0.0
-    multipliers: Any = None
-    compile_s: float = 0.0
-    n_steps: int = 0
-    mode: str = "reverse"
-
-
-class _Carry(NamedTuple):
     u: Any
     opt_state: Any
     lam: jax.Array
@@ -121,7 +88,12 @@ class _Carry(NamedTuple):
     step: jax.Array
 
 
-class _Out(NamedTuple):
+class StepInfo(NamedTuple):
+    """What one step of :func:`gradient_tuner` evaluated, per start (leading axis ``S``): the loss
+    ``f`` at the current point (before the update), its gradient norm (unconstrained coordinates),
+    the total constraint violation, whether it was finite, whether the start was still running,
+    loss evaluations it cost (line-search trials included) and the point ``x`` (params)."""
+
     f: jax.Array
     grad_norm: jax.Array
     violation: jax.Array
@@ -217,7 +189,7 @@ def _make_step(objective: Callable, opt: optax.GradientTransformation, reparam: 
     value_and_grad = _make_value_and_grad(objective, cfg.use_forward)
     extra_args = isinstance(opt, optax.GradientTransformationExtraArgs)
 
-    def tuner_step(c: _Carry) -> tuple[_Carry, _Out]:
+    def tuner_step(c: TunerState) -> tuple[TunerState, StepInfo]:
         (j, (f, g, viol, merit)), grad = value_and_grad(c.u, c.lam)
         gnorm = optax.tree.norm(grad)
         finite = jnp.isfinite(j) & jnp.isfinite(f) & jnp.isfinite(gnorm)
@@ -240,7 +212,7 @@ def _make_step(objective: Callable, opt: optax.GradientTransformation, reparam: 
             active = active & (since < cfg.patience)
         trials = optax.tree_utils.tree_get(new_state, "num_linesearch_steps", None) if extra_args else None
         evals = 1 + (jnp.asarray(trials) if trials is not None else 0)
-        new = _Carry(
+        new = TunerState(
             u=_tree_where(move, optax.apply_updates(c.u, updates), c.u),
             opt_state=_tree_where(move, new_state, c.opt_state),
             lam=lam,
@@ -255,19 +227,19 @@ def _make_step(objective: Callable, opt: optax.GradientTransformation, reparam: 
             step=c.step + 1,
         )
         new = jax.tree_util.tree_map(lambda a, b: a.astype(b.dtype), new, c)  # fixed avals: one compile
-        return new, _Out(f, gnorm, viol, finite, running, jnp.where(running, evals, 0), apply(reparam, c.u))
+        return new, StepInfo(f, gnorm, viol, finite, running, jnp.where(running, evals, 0), apply(reparam, c.u))
 
     return tuner_step
 
 
 def _initial_carry(key: jax.Array, u0: Any, opt: optax.GradientTransformation, n_starts: int,
-                   spread: float, m_constraints: int) -> _Carry:
+                   spread: float, m_constraints: int) -> TunerState:
     """Start 0 is ``u0``, the others ``u0 + spread·N(0, 1)``; strong dtypes so the step compiles once."""
     v0, unravel = ravel_pytree(u0)
     noise = spread * jax.random.normal(key, (n_starts, v0.size), v0.dtype)
     u_starts = jax.vmap(unravel)(v0[None, :] + noise.at[0].set(0.0))
     inf = jnp.full((n_starts,), jnp.inf, v0.dtype)
-    carry = _Carry(
+    carry = TunerState(
         u=u_starts,
         opt_state=jax.vmap(opt.init)(u_starts),
         lam=jnp.zeros((n_starts, m_constraints), v0.dtype),
@@ -282,6 +254,140 @@ def _initial_carry(key: jax.Array, u0: Any, opt: optax.GradientTransformation, n
     return jax.tree_util.tree_map(lambda a: jnp.array(a, dtype=a.dtype), carry)
 
 
+class Tuner(NamedTuple):
+    """The optax-like pure pair of :func:`gradient_tuner` (plus a host-side reader).
+
+    init(params0=None, key=None) -> TunerState: ``S`` starts (start 0 at ``params0``, default the
+    problem's ``space.init``); step(state) -> (state, StepInfo): one jitted step of every start;
+    best(state) -> (params, loss, start): the best point kept so far (host side, NumPy).
+    ``settings``, ``reparam``, ``n_starts``: what the pair was built with.
+    """
+
+    init: Callable[..., TunerState]
+    step: Callable[[TunerState], tuple[TunerState, StepInfo]]
+    best: Callable[[TunerState], tuple[Any, float, int]]
+    settings: _Settings
+    reparam: Any
+    n_starts: int
+
+
+class _Resolved(NamedTuple):
+    loss: Callable
+    params0: Any
+    reparam: Any
+    constraints: Callable | None
+    sims_per_eval: int
+    penalty_weight: float
+    name: str
+
+
+def _resolve(loss: Any, params0: Any, reparam: Any, constraints: Any, sims_per_eval: Any,
+             penalty_weight: Any) -> _Resolved:
+    """A Problem's defaults (``space.init``, ``space.reparam``, its constraints, scenarios per loss
+    evaluation, penalty weight), each overridden by an argument given explicitly; a plain loss
+    callable keeps the old signature's defaults."""
+    if isinstance(loss, Problem):
+        pb = loss
+        return _Resolved(pb.loss, pb.space.init if params0 is None else params0,
+                         pb.space.reparam if reparam is None else reparam,
+                         pb.constraints if constraints is None else constraints,
+                         pb.sims_per_eval if sims_per_eval is None else sims_per_eval,
+                         pb.penalty_weight if penalty_weight is None else penalty_weight, pb.name)
+    if not callable(loss):
+        raise ValueError(f"loss: must be a Problem or callable, got {type(loss).__name__}")
+    if params0 is None:
+        raise ValueError("params0: required when tuning a plain loss function (a Problem supplies space.init)")
+    return _Resolved(loss, params0, reparam, constraints, 1 if sims_per_eval is None else sims_per_eval,
+                     100.0 if penalty_weight is None else penalty_weight, getattr(loss, "__name__", "loss"))
+
+
+def _as_float_tree(params0: Any) -> Any:
+    if not jax.tree_util.tree_leaves(params0):
+        raise ValueError("params0: must contain at least one array")
+    return jax.tree_util.tree_map(lambda a: jnp.asarray(a, dtype=jnp.result_type(a, float)), params0)
+
+
+def gradient_tuner(
+    loss: Problem | Callable[[Any], jax.Array],
+    optimizer: optax.GradientTransformation | None = None,
+    *,
+    params0: Any = None,
+    reparam: Any = None,
+    constraints: Callable[[Any], jax.Array] | None = None,
+    constraint_method: ConstraintMethod = "penalty",
+    penalty_weight: float | None = None,
+    multiplier_every: int = 50,
+    constraint_tol: float = 1e-6,
+    n_starts: int = 1,
+    init_spread: float = 0.5,
+    patience: int | None = None,
+    rtol: float = 1e-8,
+    gtol: float = 0.0,
+    sims_per_eval: int | None = None,
+    mode: Mode = "auto",
+) -> Tuner:
+    """The gradient tuner as a pure pair ``(init, step)`` a user can drive from their own loop::
+
+        tuner = gradient_tuner(problem, optax.adam(0.05), n_starts=4)
+        state = tuner.init(key=jax.random.PRNGKey(0))
+        for _ in range(100):
+            state, info = tuner.step(state)        # info.f: (4,) losses, info.grad_norm, ...
+        params, loss, start = tuner.best(state)
+
+    Arguments as in :func:`tune` (``params0`` here only fixes the structure and the ``"auto"`` mode
+    choice; a Problem's ``space.init`` by default).  :func:`tune` is this pair plus the host loop.
+    """
+    r = _resolve(loss, params0, reparam, constraints, sims_per_eval, penalty_weight)
+    n_starts = check_int("n_starts", n_starts)
+    if patience is not None:
+        patience = check_int("patience", patience)
+    spread = _check_number("init_spread", init_spread, allow_zero=True)
+    if constraint_method not in ("penalty", "augmented_lagrangian"):
+        raise ValueError("constraint_method: must be 'penalty' or 'augmented_lagrangian', "
+                         f"got {constraint_method!r}")
+    if mode not in ("auto", "forward", "reverse"):
+        raise ValueError(f"mode: must be 'auto', 'forward' or 'reverse', got {mode!r}")
+    opt = optax.adam(1e-2) if optimizer is None else optimizer
+    if not (hasattr(opt, "init") and hasattr(opt, "update")):
+        raise ValueError(f"optimizer: must be an optax.GradientTransformation, got {type(opt).__name__}")
+    template = _as_float_tree(r.params0)
+    u_template = jax.eval_shape(lambda x: invert(r.reparam, x), template)
+    n_params = int(sum(np.prod(leaf.shape) for leaf in jax.tree_util.tree_leaves(u_template)))
+    cfg = _Settings(
+        w=_check_number("penalty_weight", r.penalty_weight),
+        tol=_check_number("constraint_tol", constraint_tol, allow_zero=True),
+        rtol=_check_number("rtol", rtol, allow_zero=True),
+        gtol=_check_number("gtol", gtol, allow_zero=True),
+        patience=patience,
+        multiplier_every=check_int("multiplier_every", multiplier_every),
+        al=r.constraints is not None and constraint_method == "augmented_lagrangian",
+        use_forward=mode == "forward" or (mode == "auto" and n_params <= FORWARD_MODE_MAX_PARAMS),
+        sims_per_eval=check_int("sims_per_eval", r.sims_per_eval),
+    )
+    m_constraints = 0
+    if r.constraints is not None:
+        g = jax.eval_shape(lambda u: jnp.ravel(jnp.asarray(r.constraints(apply(r.reparam, u)))), u_template)
+        m_constraints = int(np.prod(g.shape))
+    objective = _make_objective(r.loss, r.reparam, r.constraints, cfg)
+    make_carry = jax.jit(_initial_carry, static_argnums=(2, 3, 4, 5))
+    step = jax.jit(jax.vmap(_make_step(objective, opt, r.reparam, cfg)))
+
+    def init(params0: Any = None, key: jax.Array | None = None) -> TunerState:
+        x0 = template if params0 is None else _as_float_tree(params0)
+        check_finite("params0", x0)
+        check_domain(r.reparam, x0, "params0")
+        u0 = invert(r.reparam, x0)
+        check_finite("params0 (in unconstrained space)", u0)
+        return make_carry(jax.random.PRNGKey(0) if key is None else key, u0, opt, n_starts, spread, m_constraints)
+
+    def best(state: TunerState) -> tuple[Any, float, int]:
+        idx, best_loss = _best_index_and_loss(state, cfg.tol, cfg.al)
+        u = jax.tree_util.tree_map(lambda a: a[idx], state.best_u)
+        return apply(r.reparam, u), best_loss, idx
+
+    return Tuner(init, step, best, cfg, r.reparam, n_starts)
+
+
 class _Records(NamedTuple):
     f: list
     grad_norm: list
@@ -291,11 +397,13 @@ class _Records(NamedTuple):
     wall: list
 
 
-def _run_steps(step_fn: Callable, carry: _Carry, steps: int, cfg: _Settings,
-               callback: Callable | None) -> tuple[_Carry, _Records, str]:
-    """The host loop: one jitted step per iteration, records, callback and stopping."""
+def _run_steps(step_fn: Callable, carry: TunerState, steps: int, cfg: _Settings,
+               callback: Callable | None, bar: Any) -> tuple[TunerState, _Records, str, bool]:
+    """The host loop: one jitted step per iteration, records, callback and stopping.
+
+    Returns ``(state, records, reason, stopped_by_callback)``."""
     rec = _Records([], [], [], [], [], [])
-    sims, reason = 0, f"completed {steps} steps"
+    sims, reason = 0, ""
     start = time.perf_counter()
     for k in range(steps):
         carry, out = step_fn(carry)
@@ -307,11 +415,13 @@ def _run_steps(step_fn: Callable, carry: _Carry, steps: int, cfg: _Settings,
         rec.best.append(_best_index_and_loss(carry, cfg.tol, cfg.al)[1])
         rec.sims.append(sims)
         rec.wall.append(time.perf_counter() - start)
+        bar.update(1)
+        postfix(bar, f"best {rec.best[-1]:.6g}")
         f_now = np.where(host.ran & host.finite, host.f, np.inf)
         if callback is not None and np.any(np.isfinite(f_now)):
             i = int(np.argmin(f_now))
             if callback(k, jax.tree_util.tree_map(lambda a: a[i], out.x), float(f_now[i])):
-                return carry, rec, f"stopped by callback at step {k}"
+                return carry, rec, f"stopped by callback at step {k}", True
         alive, active = np.asarray(carry.alive), np.asarray(carry.active)
         if not np.any(alive & active):
             if not np.all(alive):
@@ -320,7 +430,7 @@ def _run_steps(step_fn: Callable, carry: _Carry, steps: int, cfg: _Settings,
                 reason = (f"early stop at step {k}: converged (patience={cfg.patience}, "
                           f"rtol={cfg.rtol:g}, gtol={cfg.gtol:g})")
             break
-    return carry, rec, reason
+    return carry, rec, reason, False
 
 
 def _history(rec: _Records) -> History:
@@ -328,13 +438,13 @@ def _history(rec: _Records) -> History:
     f_masked = np.where(np.isfinite(f_hist), f_hist, np.inf)
     rows, pick = np.arange(len(rec.f)), np.argmin(f_masked, axis=1)
     return History(
-        loss=f_masked[rows, pick], best_loss=np.asarray(rec.best, float), grad_norm=g_hist[rows, pick],
-        sims=np.asarray(rec.sims), wall_s=np.asarray(rec.wall), loss_per_start=f_hist,
+        best_loss=np.asarray(rec.best, float), sims=np.asarray(rec.sims), wall_s=np.asarray(rec.wall),
+        loss=f_masked[rows, pick], grad_norm=g_hist[rows, pick], loss_per_start=f_hist,
         grad_norm_per_start=g_hist, violation_per_start=np.stack(rec.violation),
     )
 
 
-def _non_finite_note(carry: _Carry, history: History, idx: int, best_loss: float) -> str:
+def _non_finite_note(carry: TunerState, history: History, idx: int, best_loss: float) -> str:
     """'' when every start stayed finite; otherwise which starts broke, when, and what was kept."""
     dead = np.flatnonzero(~np.asarray(carry.alive))
     if not dead.size:
@@ -346,16 +456,33 @@ def _non_finite_note(carry: _Carry, history: History, idx: int, best_loss: float
             f"{int(np.asarray(carry.best_step)[idx])}, loss {best_loss:.6g})")
 
 
+def _convergence(carry: TunerState, history: History, idx: int, cfg: _Settings, reason: str,
+                 by_callback: bool, steps: int) -> tuple[bool, str]:
+    """Whether start ``idx`` (the one kept) met the convergence test, and the message saying so."""
+    last_g = float(history.grad_norm_per_start[-1, idx])
+    alive, active = bool(np.asarray(carry.alive)[idx]), bool(np.asarray(carry.active)[idx])
+    converged = alive and not active and not by_callback
+    test = f"gtol={cfg.gtol:g}" + (f", patience={cfg.patience} at rtol={cfg.rtol:g}" if cfg.patience else "")
+    if converged:
+        why = ("gradient norm ≤ gtol" if last_g <= cfg.gtol
+               else f"no relative improvement > rtol for {cfg.patience} steps")
+        head = reason or f"converged within {steps} steps"
+        return True, f"{head}; start {idx} converged: {why} (last gradient norm {last_g:.3g})"
+    if not reason:
+        reason = f"ran out of steps: {steps} steps without meeting the convergence test ({test})"
+    return False, f"{reason}; last gradient norm {last_g:.3g} (start {idx})"
+
+
 def tune(
-    loss: Callable[[Any], jax.Array],
-    params0: Any,
+    loss: Problem | Callable[[Any], jax.Array],
+    params0: Any = None,
     *,
     optimizer: optax.GradientTransformation | None = None,
     steps: int = 200,
     reparam: Any = None,
     constraints: Callable[[Any], jax.Array] | None = None,
     constraint_method: ConstraintMethod = "penalty",
-    penalty_weight: float = 100.0,
+    penalty_weight: float | None = None,
     multiplier_every: int = 50,
     constraint_tol: float = 1e-6,
     n_starts: int = 1,
@@ -365,107 +492,92 @@ def tune(
     rtol: float = 1e-8,
     gtol: float = 0.0,
     callback: Callable[[int, Any, float], bool | None] | None = None,
-    sims_per_eval: int = 1,
+    sims_per_eval: int | None = None,
     mode: Mode = "auto",
+    progress: Any = False,
 ) -> TuneResult:
-    """Minimise ``loss(params)`` from ``params0`` by gradient steps of ``optimizer``.
+    """Minimise a :class:`~jaxsim.problem.Problem`'s loss (or ``loss(params)``) by gradient steps.
 
     Args:
-        loss: ``params -> scalar``, pure and differentiable (jitted by the tuner).
-        params0: pytree of arrays, inside the domain of ``reparam``.
+        loss: a Problem (its ``space.init``, ``space.reparam``, ``constraints``, scenarios per loss
+            evaluation and ``penalty_weight`` are the defaults of the arguments below), or a plain
+            ``params -> scalar`` function, pure and differentiable (jitted by the tuner).
+        params0: pytree of arrays inside the domain of ``reparam`` (required for a plain loss).
         optimizer: any ``optax.GradientTransformation`` (default ``optax.adam(1e-2)``); line-search
             optimisers (``optax.lbfgs``) receive ``value``, ``grad`` and ``value_fn``.
         steps: maximum number of loss evaluations per start.
-        reparam: pytree of :mod:`optim.reparam` objects (a prefix of ``params0``); None: identity.
+        reparam: pytree of :mod:`jaxsim.problem.reparam` objects (a prefix of ``params0``); None:
+            identity (a Problem: its space's).
         constraints: ``params -> g``; feasible iff every ``g ≤ 0``.
         constraint_method: ``"penalty"`` or ``"augmented_lagrangian"`` (module docstring).
-        penalty_weight: ``w`` of the penalty / augmented Lagrangian.
+        penalty_weight: ``w`` of the penalty / augmented Lagrangian (default 100, a Problem's own).
         multiplier_every: steps between multiplier updates (augmented Lagrangian).
         constraint_tol: total violation below which a point counts as feasible.
         n_starts, key, init_spread: multi-start (vmapped); perturbations are in ``u``-space.
-        patience, rtol: a start stops once its kept point has not improved by more than
+        patience, rtol: a start stops (converged) once its kept point has not improved by more than
             ``rtol`` (relative) for ``patience`` steps (None: never).
-        gtol: a start stops once its gradient norm (in ``u``-space) is ≤ ``gtol``.
+        gtol: a start stops (converged) once its gradient norm (in ``u``-space) is ≤ ``gtol``.
         callback: ``callback(step, params, loss) -> stop`` after every step, with the current
             iterate of the start with the lowest current loss; a true return value stops the run.
-        sims_per_eval: simulations one loss evaluation costs (accounting only).
+        sims_per_eval: simulations one loss evaluation costs (accounting only; default 1, a
+            Problem's number of scenarios).
         mode: ``"auto"``, ``"forward"`` or ``"reverse"`` gradient.
+        progress: ``True`` for a tqdm bar (steps, best loss), or a bar factory
+            (:mod:`jaxsim.core.progress`).
+
+    Returns:
+        :class:`~optim.results.TuneResult`; ``converged`` says whether the start kept met the
+        convergence test (``gtol`` / ``patience``) rather than running out of steps, and
+        ``message`` gives the reason and the last gradient norm.
     """
-    if not callable(loss):
-        raise ValueError(f"loss: must be callable, got {type(loss).__name__}")
-    steps = check_int("steps", steps)
-    n_starts = check_int("n_starts", n_starts)
-    if patience is not None:
-        patience = check_int("patience", patience)
-    spread = _check_number("init_spread", init_spread, allow_zero=True)
-    if constraint_method not in ("penalty", "augmented_lagrangian"):
-        raise ValueError("constraint_method: must be 'penalty' or 'augmented_lagrangian', "
-                         f"got {constraint_method!r}")
-    if mode not in ("auto", "forward", "reverse"):
-        raise ValueError(f"mode: must be 'auto', 'forward' or 'reverse', got {mode!r}")
     if callback is not None and not callable(callback):
         raise ValueError("callback: must be callable or None")
-    opt = optax.adam(1e-2) if optimizer is None else optimizer
-    if not (hasattr(opt, "init") and hasattr(opt, "update")):
-        raise ValueError(f"optimizer: must be an optax.GradientTransformation, got {type(opt).__name__}")
-    if not jax.tree_util.tree_leaves(params0):
-        raise ValueError("params0: must contain at least one array")
-    params0 = jax.tree_util.tree_map(lambda a: jnp.asarray(a, dtype=jnp.result_type(a, float)), params0)
-    check_finite("params0", params0)
-    check_domain(reparam, params0, "params0")
-    u0 = invert(reparam, params0)
-    check_finite("params0 (in unconstrained space)", u0)
-    n_params = int(ravel_pytree(u0)[0].size)
-    cfg = _Settings(
-        w=_check_number("penalty_weight", penalty_weight),
-        tol=_check_number("constraint_tol", constraint_tol, allow_zero=True),
-        rtol=_check_number("rtol", rtol, allow_zero=True),
-        gtol=_check_number("gtol", gtol, allow_zero=True),
-        patience=patience,
-        multiplier_every=check_int("multiplier_every", multiplier_every),
-        al=constraints is not None and constraint_method == "augmented_lagrangian",
-        use_forward=mode == "forward" or (mode == "auto" and n_params <= FORWARD_MODE_MAX_PARAMS),
-        sims_per_eval=check_int("sims_per_eval", sims_per_eval),
-    )
-    m_constraints = 0
-    if constraints is not None:
-        g = jax.eval_shape(lambda u: jnp.ravel(jnp.asarray(constraints(apply(reparam, u)))), u0)
-        m_constraints = int(np.prod(g.shape))
-
-    objective = _make_objective(loss, reparam, constraints, cfg)
+    steps = check_int("steps", steps)
+    tuner = gradient_tuner(loss, optimizer, params0=params0, reparam=reparam, constraints=constraints,
+                           constraint_method=constraint_method, penalty_weight=penalty_weight,
+                           multiplier_every=multiplier_every, constraint_tol=constraint_tol, n_starts=n_starts,
+                           init_spread=init_spread, patience=patience, rtol=rtol, gtol=gtol,
+                           sims_per_eval=sims_per_eval, mode=mode)
+    cfg = tuner.settings
     t0 = time.perf_counter()
-    carry = jax.jit(_initial_carry, static_argnums=(2, 3, 4, 5))(
-        jax.random.PRNGKey(0) if key is None else key, u0, opt, n_starts, spread, m_constraints)
-    step_fn = jax.jit(jax.vmap(_make_step(objective, opt, reparam, cfg)))
-    step_fn.lower(carry).compile()  # cached by jit for the loop below
+    carry = tuner.init(None, key)
+    tuner.step.lower(carry).compile()  # cached by jit for the loop below
     compile_s = time.perf_counter() - t0
 
-    carry, rec, reason = _run_steps(step_fn, carry, steps, cfg, callback)
+    name = loss.name if isinstance(loss, Problem) else "loss"
+    bar = progress_bar(progress, total=steps, desc=f"tune {name}", unit="step")
+    try:
+        carry, rec, reason, by_callback = _run_steps(tuner.step, carry, steps, cfg, callback, bar)
+    finally:
+        bar.close()
     wall = rec.wall[-1]
     idx, best_loss = _best_index_and_loss(carry, cfg.tol, cfg.al)
     # a start whose loss or gradient is not finite stops there: its first point was all it evaluated
-    check_some_loss_finite(best_loss, f"the first point of each of the {n_starts} start(s)",
+    check_some_loss_finite(best_loss, f"the first point of each of the {tuner.n_starts} start(s)",
                            f"check params0 and the loss (first values {np.asarray(rec.f[0])})")
     history = _history(rec)
+    converged, message = _convergence(carry, history, idx, cfg, reason, by_callback, len(rec.f))
     best_u = jax.tree_util.tree_map(lambda a: a[idx], carry.best_u)
     return TuneResult(
-        params=apply(reparam, best_u),
+        params=apply(tuner.reparam, best_u),
         loss=float(best_loss),
         history=history,
         n_sims=int(rec.sims[-1]),
         wall_s=float(wall),
-        message=reason + _non_finite_note(carry, history, idx, best_loss),
+        compile_s=float(compile_s),
+        converged=converged,
+        message=message + _non_finite_note(carry, history, idx, best_loss),
         start_index=int(idx),
         u=best_u,
-        constraint_violation=float(np.asarray(carry.best_v)[idx]) if constraints is not None else 0.0,
+        constraint_violation=float(np.asarray(carry.best_v)[idx]) if cfg.al or constraints is not None
+        or (isinstance(loss, Problem) and loss.constraints is not None) else 0.0,
         multipliers=np.asarray(carry.lam[idx]) if cfg.al else None,
-        compile_s=float(compile_s),
         n_steps=len(rec.f),
         mode="forward" if cfg.use_forward else "reverse",
     )
 
 
-def _best_index_and_loss(carry: _Carry, tol: float, feasible_first: bool) -> tuple[int, float]:
+def _best_index_and_loss(carry: TunerState, tol: float, feasible_first: bool) -> tuple[int, float]:
     """The start whose kept point ranks first, and that point's loss."""
     f = np.asarray(carry.best_f)
     v = np.asarray(carry.best_v)

@@ -8,7 +8,9 @@ Definitions follow python-control's ``step_info`` so the two can be compared sam
 * overshoot: ``100·(max(sgn·y) − |y_final|)/|y_final|`` in percent, 0 if negative.
 
 Integral criteria use the rectangle rule on the grid (``dt = t[1] − t[0]``): IAE ``Σ|e|dt``,
-ISE ``Σe²dt``, ITAE ``Σ t|e| dt``, control energy ``Σ‖u‖²dt``.
+ISE ``Σe²dt``, ITAE ``Σ t|e| dt``, control energy ``Σ‖u‖²dt``.  Their integrands (``*_integrand``)
+are the one definition of these criteria: the running costs of :mod:`jaxsim.core.costs` add the same
+integrand tick by tick inside ``fold``.
 
 Smooth surrogates for losses (exact as the temperatures go to 0):
 
@@ -32,25 +34,56 @@ def _dt(t: jax.Array) -> jax.Array:
     return t[1] - t[0]
 
 
+# -- integrands (element-wise; summed over samples and channels by the callers) ----------------
+
+
+def iae_integrand(e: jax.Array) -> jax.Array:
+    """``|e|`` (error units)."""
+    return jnp.abs(e)
+
+
+def ise_integrand(e: jax.Array) -> jax.Array:
+    """``e²`` (error units squared)."""
+    return e**2
+
+
+def itae_integrand(weight: jax.Array, e: jax.Array) -> jax.Array:
+    """``w·|e|`` with the time weight ``w`` (s; ``t`` for the classic ITAE), broadcast against ``e``."""
+    return weight * jnp.abs(e)
+
+
+def energy_integrand(u: jax.Array, offset: jax.Array | float = 0.0) -> jax.Array:
+    """``(u − offset)²`` (input units squared; ``offset`` e.g. a trim input)."""
+    return (u - offset) ** 2
+
+
+def saturation_excess_integrand(u: jax.Array, u_max: jax.Array | float) -> jax.Array:
+    """``max(0, |u| − u_max)²``: zero inside the limits, quadratic outside."""
+    return jnp.maximum(jnp.abs(u) - u_max, 0.0) ** 2
+
+
+# -- integral criteria over a sampled trajectory ---------------------------------------------------
+
+
 def iae(t: jax.Array, e: jax.Array) -> jax.Array:
     """Integral of absolute error; ``e`` shape ``(N,)`` or ``(N, k)`` (summed over channels)."""
-    return jnp.sum(jnp.abs(e)) * _dt(t)
+    return jnp.sum(iae_integrand(e)) * _dt(t)
 
 
 def ise(t: jax.Array, e: jax.Array) -> jax.Array:
     """Integral of squared error."""
-    return jnp.sum(e**2) * _dt(t)
+    return jnp.sum(ise_integrand(e)) * _dt(t)
 
 
 def itae(t: jax.Array, e: jax.Array) -> jax.Array:
     """Integral of time-weighted absolute error."""
     tt = t.reshape(t.shape + (1,) * (e.ndim - 1))
-    return jnp.sum(tt * jnp.abs(e)) * _dt(t)
+    return jnp.sum(itae_integrand(tt, e)) * _dt(t)
 
 
 def control_energy(t: jax.Array, u: jax.Array) -> jax.Array:
     """Integral of ``‖u‖²``."""
-    return jnp.sum(u**2) * _dt(t)
+    return jnp.sum(energy_integrand(u)) * _dt(t)
 
 
 def steady_state_error(e: jax.Array, tail: int = 1) -> jax.Array:
@@ -116,10 +149,21 @@ def _softmax_mean(v: jax.Array, temperature: float) -> jax.Array:
     return jnp.sum(w * v)
 
 
+def overshoot_samples(y: jax.Array, y_final: jax.Array) -> jax.Array:
+    """``100·(sgn(y_f)·y − |y_f|)/|y_f|``: each sample's excursion beyond the final value, percent."""
+    return 100.0 * (jnp.sign(y_final) * y - jnp.abs(y_final)) / jnp.abs(y_final)
+
+
+def settling_samples(t_next: jax.Array, y: jax.Array, y_final: jax.Array, band: float,
+                     band_temperature: float) -> jax.Array:
+    """``t_{i+1}·σ((|y_i/y_f − 1| − band)/τ_b)``: the time a sample would set the settling time, s."""
+    return t_next * jax.nn.sigmoid((jnp.abs(y / y_final - 1) - band) / band_temperature)
+
+
 def soft_overshoot(y: jax.Array, y_final: jax.Array | None = None, temperature: float = 0.5) -> jax.Array:
     """Smooth overshoot in percent (see module docstring); ``y`` shape ``(N,)``."""
     yf = y[-1] if y_final is None else jnp.asarray(y_final)
-    v = 100.0 * (jnp.sign(yf) * y - jnp.abs(yf)) / jnp.abs(yf)
+    v = overshoot_samples(y, yf)
     return temperature * jax.nn.softplus(_softmax_mean(v, temperature) / temperature)
 
 
@@ -133,7 +177,6 @@ def soft_settling_time(
 ) -> jax.Array:
     """Smooth settling time in the unit of ``t`` (see module docstring)."""
     yf = y[-1] if y_final is None else jnp.asarray(y_final)
-    dev = jnp.abs(y / yf - 1)
     t_next = jnp.concatenate([t[1:], t[-1:] + _dt(t)])
-    v = t_next * jax.nn.sigmoid((dev - band) / band_temperature)
+    v = settling_samples(t_next, y, yf, band, band_temperature)
     return _softmax_mean(v, time_temperature)

@@ -57,6 +57,24 @@ class Step:
 
 
 @pytree_dataclass
+class FilteredStep:
+    """``s(t) = amplitude · (1 − exp(−(t − t0)/tau)) · 1(t ≥ t0)``: a step through a first-order
+    reference prefilter of time constant ``tau > 0`` (a servo's smoothed set-point move)."""
+
+    amplitude: Any = 1.0
+    tau: Any = 0.1
+    t0: Any = 0.0
+
+    def validate(self, name: str) -> None:
+        """``tau`` must be positive."""
+        check_positive(f"{name}.tau", self.tau)
+
+    def __call__(self, t: jax.Array) -> jax.Array:
+        late = _after(t, self.t0)
+        return _vec(self.amplitude) * (-jnp.expm1(-jnp.maximum(t - self.t0, 0.0) / self.tau)) * late
+
+
+@pytree_dataclass
 class Ramp:
     """``s(t) = slope · (t − t0) · 1(t ≥ t0)``."""
 

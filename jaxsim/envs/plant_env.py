@@ -3,14 +3,19 @@
 One generic wrapper, :class:`PlantEnv`, built from a :class:`Task` — the plant (its pure
 ``dynamics``/``output`` functions), the control period, the solver, the reference signal, the input
 limits, the per-step loss and the observation.  The per-plant modules of this package
-(:mod:`jaxsim.envs.second_order`, :mod:`jaxsim.envs.trms`, ...) only build tasks.
+(:mod:`jaxsim.envs.second_order`, :mod:`jaxsim.envs.trms`, ...) only build tasks, and
+:meth:`PlantEnv.from_problem` builds one from a :class:`~jaxsim.problem.Problem`: its scenario's
+plant, reference, disturbance, initial state and timing, and the reward ``−objective.rate`` (the
+running cost of one tick, so ``−Σ rewards`` over the horizon is the problem's total for the
+policy's inputs).
 
 One env step is one controller tick of :func:`jaxsim.core.rollout.simulate` without sensor,
 estimator or disturbance: at tick ``k`` (time ``t_k = k·dt``) the action ``a ∈ [−1, 1]^m`` is mapped
 affinely onto ``[u_low, u_high]`` (``a = −1 → u_low``, ``a = +1 → u_high``; actions outside are
-clipped), the reward is ``−step_loss(t_k, r(t_k), y_k, u_k)``, and the plant integrates ``substeps``
-solver steps with ``u_k`` held (:func:`jaxsim.core.rollout.hold_input`, the same plant step as
-``simulate``).  The observation is ``observe(x_{k+1}, r(t_{k+1}), t_{k+1})``.
+clipped), the reward is ``−step_loss(t_k, r(t_k), y_k, u_k)`` (or ``−tick_loss(tick_k, dt)`` on the
+whole :class:`~jaxsim.core.rollout.Tick`), and the plant integrates ``substeps`` solver steps with
+``u_k`` held (:func:`jaxsim.core.rollout.hold_input`, the same plant step as ``simulate``, the task's
+disturbance entering through ``actuate``).  The observation is ``observe(x_{k+1}, r(t_{k+1}), t_{k+1})``.
 
 ``done`` is set only when the task's ``terminate(x)`` says so or the state is no longer finite;
 episode truncation (a time limit) is left to brax's ``EpisodeWrapper`` (``brax.envs.wrappers.
@@ -28,9 +33,9 @@ import numpy as np
 from brax.envs.base import Env, State
 
 from jaxsim.core.integrators import RK4, Solver
-from jaxsim.core.rollout import hold_input
+from jaxsim.core.rollout import Tick, hold_input
 from jaxsim.core.signals import Constant
-from jaxsim.core.system import Plant
+from jaxsim.core.system import Plant, subtract_input_disturbance
 from jaxsim.core.validation import check_positive
 
 StepLoss = Callable[[jax.Array, jax.Array, jax.Array, jax.Array], jax.Array]
@@ -53,7 +58,7 @@ class Task:
     Attributes:
         plant: the plant (``dynamics``, ``output``, parameters).
         step_loss: ``(t, r (k,), y (p,), u (m,)) -> scalar`` loss accrued over one control period
-            starting at ``t``; the reward is its negative.
+            starting at ``t``; the reward is its negative.  ``None`` when ``tick_loss`` is given.
         u_low, u_high: ``(m,)`` input limits onto which actions in ``[−1, 1]`` are mapped.
         dt: control period (one env step).
         x0: ``(n,)`` nominal initial state.
@@ -63,6 +68,10 @@ class Task:
         substeps: solver steps per control period (integration step ``dt/substeps``).
         solver: fixed-step solver (default RK4).
         terminate: optional ``x -> bool`` failure condition (ends the episode).
+        tick_loss: optional ``(tick, dt) -> scalar`` loss of one tick from the whole
+            :class:`~jaxsim.core.rollout.Tick` (state included); replaces ``step_loss``.
+        disturbance: ``d(t)`` signal entering the plant input through ``actuate(u, d)`` (default zero).
+        actuate: how the disturbance enters (default ``u − d``, as in :class:`~jaxsim.core.rollout.ClosedLoop`).
     """
 
     plant: Plant
@@ -77,8 +86,13 @@ class Task:
     substeps: int = 1
     solver: Solver = RK4
     terminate: Callable[[jax.Array], jax.Array] | None = None
+    tick_loss: Callable[[Tick, Any], jax.Array] | None = None
+    disturbance: Any = field(default_factory=lambda: Constant(0.0))
+    actuate: Callable[[jax.Array, jax.Array], jax.Array] = subtract_input_disturbance
 
     def __post_init__(self):
+        if (self.step_loss is None) == (self.tick_loss is None):
+            raise ValueError("step_loss/tick_loss: give exactly one of them")
         check_positive("dt", self.dt)
         if int(self.substeps) != self.substeps or self.substeps < 1:
             raise ValueError(f"substeps: must be a positive integer, got {self.substeps!r}")
@@ -107,6 +121,8 @@ class PlantEnv(Env):
     """A :class:`Task` as a brax ``Env`` (pure, jit- and vmap-compatible ``reset``/``step``)."""
 
     def __init__(self, task: Task):
+        if not isinstance(task, Task):
+            raise ValueError(f"task: expected a Task, got {type(task).__name__}")
         self.task = task
         self._observe = task.observe or observe_state_and_error(task.plant)
         m = task.plant.n_inputs
@@ -129,9 +145,15 @@ class PlantEnv(Env):
         x, k = state.pipeline_state
         t = self.time(k)
         u = self.input(action)
-        loss = task.step_loss(t, task.reference(t), task.plant.h(x), u)
+        r, y = task.reference(t), task.plant.h(x)
+        if task.tick_loss is not None:
+            d = task.disturbance(t)
+            tick = Tick(t=t, x=x, y=y, y_meas=y, measured=jnp.asarray(True), u=u, r=r, d=d, x_hat=None)
+            loss = task.tick_loss(tick, task.dt)
+        else:
+            loss = task.step_loss(t, r, y, u)
         x_next = hold_input(task.plant, x, u, t, jnp.asarray(task.dt / task.substeps, x.dtype),
-                            int(task.substeps), task.solver)
+                            int(task.substeps), task.solver, task.disturbance, task.actuate)
         failed = ~jnp.all(jnp.isfinite(x_next))
         if task.terminate is not None:
             failed = failed | task.terminate(x_next)
@@ -141,6 +163,35 @@ class PlantEnv(Env):
         return state.replace(pipeline_state=PlantState(x_next, k_next), obs=jnp.where(failed, 0.0, obs),
                              reward=-loss.astype(state.reward.dtype), done=done,
                              metrics={**state.metrics, "loss": loss.astype(state.reward.dtype)})
+
+    @classmethod
+    def from_problem(cls, problem: Any, params: Any = None, draw: dict[str, Any] | None = None, *,
+                     u_low: Any = -1.0, u_high: Any = 1.0, x0_spread: Any = 0.0, observe: Observe | None = None,
+                     terminate: Callable[[jax.Array], jax.Array] | None = None) -> "PlantEnv":
+        """The env of a :class:`~jaxsim.problem.Problem`'s scenario: the policy replaces its controller.
+
+        ``build(params, draw)`` (default ``space.init`` and the nominal draw) gives the plant,
+        reference, disturbance, ``x0``, the control period and substeps; the reward of a step is
+        ``−objective.rate(tick, ts)`` (the objective must be additive: every term has a ``rate``).
+        Actions in ``[−1, 1]`` map onto ``[u_low, u_high]`` (the problem does not know the input
+        limits; by default actions are the inputs).  Sensor and estimator are not used (the policy
+        observes ``observe(x, r, t)``, default :func:`observe_state_and_error`).
+        """
+        objective = getattr(problem, "objective", None)
+        if objective is None:
+            raise ValueError("problem: needs an objective of running costs (a from_loss problem has none)")
+        if objective.rate is None:
+            raise ValueError("problem: its objective is not additive (a term has no rate, e.g. a soft overshoot); "
+                             "an env reward needs the increment of one tick")
+        sc = problem.scenario(problem.space.init if params is None else params, draw)
+        timing = sc.timing
+        _, substeps, _ = timing.resolve(None)
+        loop = sc.loop
+        task = Task(plant=loop.plant, step_loss=None, u_low=u_low, u_high=u_high, dt=timing.ts,
+                    x0=np.asarray(sc.x0, float), x0_spread=x0_spread, reference=loop.reference, observe=observe,
+                    substeps=substeps, solver=sc.solver, terminate=terminate, tick_loss=objective.rate,
+                    disturbance=loop.disturbance, actuate=loop.actuate)
+        return cls(task)
 
     @property
     def observation_size(self) -> int:

@@ -12,6 +12,7 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
+from jaxsim.core.metrics import itae_integrand
 from jaxsim.core.signals import Step
 from jaxsim.envs.plant_env import PlantEnv, Task
 from jaxsim.plants.second_order import AstaticParams, StaticParams, astatic_plant, static_plant
@@ -21,7 +22,7 @@ def itae_step(dt: float):
     """``(t, r, y, u) -> t·Σ|r − y|·dt``: the ITAE accrued over one period (rectangle rule)."""
 
     def loss(t: jax.Array, r: jax.Array, y: jax.Array, u: jax.Array) -> jax.Array:
-        return t * jnp.sum(jnp.abs(r - y)) * dt
+        return jnp.sum(itae_integrand(t, r - y)) * dt
 
     return loss
 

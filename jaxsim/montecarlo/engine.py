@@ -31,6 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax.sharding import Mesh, PartitionSpec as P
 
+from jaxsim.core.progress import progress_bar
 from jaxsim.montecarlo.designs import Design, single_point
 from jaxsim.montecarlo.distributions import describe_space, is_distribution, validate_space
 from jaxsim.montecarlo.jaxpr_hash import jaxpr_hash
@@ -319,10 +320,14 @@ class _ChunkSource:
         return chunk
 
 
-class _NullBar:
-    def update(self, *_: Any) -> None: ...
-
-    def close(self) -> None: ...
+def _from_problem(fn: Any, space: Any, name: str | None) -> tuple[Callable, Any, str | None]:
+    """A :class:`~jaxsim.problem.Problem` given as ``fn`` (with its params as ``space``): its per-run
+    Breakdown terms over its ``{**nominal, **uncertainty}`` (duck-typed: the Problem layer sits above)."""
+    spec = getattr(fn, "monte_carlo_spec", None)
+    if spec is None:
+        return fn, space, name
+    metric, full_space = spec(space)
+    return metric, full_space, name or f"problem:{fn.name}"
 
 
 def sweep(
@@ -348,8 +353,12 @@ def sweep(
     Args:
         fn: ``fn(key, params) -> metrics``: pure JAX, vmappable; ``params`` is a draw of ``space``
             updated with the point's values; ``metrics`` a pytree of real arrays (statistics) and
-            booleans (events).
-        space: pytree (a dict when ``design`` sets parameters) of distributions and fixed values.
+            booleans (events).  Or a :class:`~jaxsim.problem.Problem`: the metrics are the per-run
+            :class:`~jaxsim.core.costs.Breakdown` terms (and ``"total"``) at the parameters given
+            as ``space``, drawn over the problem's ``{**nominal, **uncertainty}`` with fresh noise
+            every run; a design then sets nominal values (``sweep(problem, params, grid(...), n, key)``).
+        space: pytree (a dict when ``design`` sets parameters) of distributions and fixed values
+            (for a Problem: the params pytree).
         design: points to visit (:func:`~jaxsim.montecarlo.designs.grid`, ``latin_hypercube``,
             ``sobol``, ``points``, ``single_point``); every point uses the same ``key`` (common
             random numbers: differences between points are not blurred by sampling noise).  Each
@@ -371,9 +380,11 @@ def sweep(
         name, extra: identity of ``fn`` in the fingerprint (default ``module.qualname``) and any
             JSON-able configuration that changes what ``fn`` computes (recorded in the manifest;
             the jaxpr hash covers what ``fn`` closes over as well).
-        progress: ``progress(total=, initial=, unit=, unit_scale=, desc=)`` returning a bar with
-            ``update(k)``/``close()`` (tqdm, ``experiments.progress.bar``); default silent.
+        progress: ``True`` for a tqdm bar, or ``progress(total=, initial=, unit=, unit_scale=, desc=)``
+            returning a bar with ``update(k)``/``close()`` (tqdm, ``experiments.progress.bar``);
+            default silent.
     """
+    fn, space, name = _from_problem(fn, space, name)
     n = _check_int("n", n, 1, 2**32 - 1)
     block_size = _check_int("block_size", block_size, 1)
     keep_runs = _check_int("keep_runs", keep_runs, 0, min(n, MAX_KEEP_RUNS))
@@ -411,8 +422,8 @@ def sweep(
     source = _ChunkSource(kernel, mesh, chunking, leaves, sketch, store, len(design), key_data, space)
 
     initial = int(sum(chunking.runs(c) for _, c in zip(*np.nonzero(source.done))))
-    bar = progress(total=len(design) * n, initial=initial, unit="run", unit_scale=True,
-                   desc=fn_name.rsplit(".", 1)[-1]) if (progress is not None and main) else _NullBar()
+    bar = progress_bar(progress if main else None, total=len(design) * n, initial=initial, unit="run",
+                       unit_scale=True, desc=fn_name.rsplit(".", 1)[-1])
     results = []
     try:
         for p in range(len(design)):
@@ -446,7 +457,10 @@ def sweep(
 
 
 def monte_carlo(fn: Callable[[jax.Array, Any], Any], space: Any, n: int, key: Any, **kwargs: Any) -> MonteCarloResult:
-    """Monte Carlo of ``n`` runs of ``fn`` over ``space`` (a one-point :func:`sweep`; same options)."""
+    """Monte Carlo of ``n`` runs of ``fn`` over ``space`` (a one-point :func:`sweep`; same options).
+
+    ``monte_carlo(problem, params, n, key)``: a :class:`~jaxsim.problem.Problem`'s per-run cost terms
+    at ``params`` over its uncertainty (see :func:`sweep`)."""
     return sweep(fn, space, single_point(), n, key, **kwargs).points[0]
 
 

@@ -4,7 +4,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxsim.core.signals import Constant, Piecewise, Ramp, Sine, Square, Step, Sum, sample
+from jaxsim.core.signals import Constant, FilteredStep, Piecewise, Ramp, Sine, Square, Step, Sum, sample
 
 T = jnp.linspace(0.0, 4.0, 401)
 
@@ -41,3 +41,14 @@ def test_sum_and_vector_signals_and_vmap():
 def test_signal_is_differentiable_in_its_parameters():
     g = jax.grad(lambda a: Sine(a, 1.0)(jnp.asarray(0.125))[0])(2.0)
     np.testing.assert_allclose(g, np.sin(2 * np.pi * 0.125))
+
+
+def test_filtered_step_closed_form_and_bad_time_constant():
+    import pytest
+
+    ts = np.array([0.0, 0.2, 0.5, 0.9])
+    got = np.asarray(sample(FilteredStep(2.0, 0.3, 0.2), ts))[:, 0]
+    want = np.where(ts >= 0.2, 2.0 * (1 - np.exp(-(ts - 0.2) / 0.3)), 0.0)
+    np.testing.assert_allclose(got, want, rtol=1e-14, atol=1e-16)
+    with pytest.raises(ValueError, match=r"signal.tau"):
+        sample(FilteredStep(1.0, 0.0), ts)

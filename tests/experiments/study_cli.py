@@ -3,16 +3,20 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
 
-from tests.conftest import ROOT
+from tests.conftest import CACHE_DIR, ROOT
 
 
-def run_quick_study(name: str, out: Path, timeout: float = 900) -> dict:
-    """``python -m experiments run NAME --quick --out OUT``; asserts success, returns results.json."""
-    proc = subprocess.run([sys.executable, "-m", "experiments", "run", name, "--quick", "--out", str(out)],
-                          capture_output=True, text=True, cwd=ROOT, timeout=timeout)
+def run_quick_study(name: str, out: Path, *extra: str, timeout: float = 900) -> dict:
+    """``python -m experiments run NAME --quick [EXTRA...] --out OUT``; asserts success, returns results.json.
+
+    ``extra``: further arguments, e.g. ``"--set", "budget=64"``."""
+    proc = subprocess.run([sys.executable, "-m", "experiments", "run", name, "--quick", *extra, "--out", str(out)],
+                          capture_output=True, text=True, cwd=ROOT, timeout=timeout,
+                          env={**os.environ, "JAX_COMPILATION_CACHE_DIR": str(CACHE_DIR)})
     assert proc.returncode == 0, proc.stderr[-3000:]
     return json.loads((Path(out) / "results.json").read_text())

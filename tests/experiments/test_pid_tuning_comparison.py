@@ -1,4 +1,5 @@
-"""The pid_tuning_comparison study through the CLI (quick mode), checked against its own oracle."""
+"""The pid_tuning_comparison study through the CLI (quick preset + a --set override), checked against its
+own oracle (IPOPT on the CasADi rebuild of the loss) and its reproduction table."""
 
 import csv
 
@@ -13,7 +14,7 @@ TUNERS = ("gradient", "gradient_lbfgs", "pso", "random", "grid", "ipopt")
 @pytest.fixture(scope="module")
 def study_output(tmp_path_factory):
     out = tmp_path_factory.mktemp("ptc")
-    return out, run_quick_study("pid_tuning_comparison", out)
+    return out, run_quick_study("pid_tuning_comparison", out, "--set", "n_particles=16")
 
 
 def test_outputs_and_contracted_metric_keys(study_output):
@@ -21,7 +22,11 @@ def test_outputs_and_contracted_metric_keys(study_output):
     m = res["metrics"]
     for name in TUNERS:
         assert f"loss_{name}" in m and f"sims_{name}" in m and f"wall_s_{name}" in m
-    assert res["config"]["quick"] is True and m["budget"] == 640
+    # the preset resolved once, the --set applied on top, and that config is what ran
+    assert res["preset"] == "quick" and res["config"]["budget"] == m["budget"] == 640
+    assert res["config"]["n_particles"] == 16 and "quick" not in res["config"]
+    pso_row = next(r for r in res["tables"]["comparison"] if r["tuner"] == "pso")
+    assert pso_row["message"].startswith("40 iterations of 16 particles")
     for key in ("loss", "controller_period", "derivative_filter", "budget"):
         assert res["assumptions"][key]["why"]
     assert (out / "loss_vs_budget.png").stat().st_size > 20_000
@@ -50,3 +55,13 @@ def test_budgets_are_equal_and_ipopt_is_the_optimum(study_output):
     grad = next(r for r in table if r["tuner"] == "gradient_lbfgs")
     gains = ("kp", "ki", "kd")
     np.testing.assert_allclose([grad[k] for k in gains], [opt[k] for k in gains], rtol=1e-5)
+
+
+def test_reproduction_table(study_output):
+    out, res = study_output
+    rows = {r["metric"]: r for r in res["reproduction"]}
+    assert set(rows) == {"jax_vs_casadi_loss_rel_diff", "jax_vs_casadi_grad_rel_diff", "gap_to_ipopt_gradient_lbfgs",
+                         "gradient_vs_ipopt_gain_rel_diff"}
+    for r in rows.values():
+        assert r["verdict"] == "reproduced" and r["ours"] == res["metrics"][r["metric"]] and r["source"]
+    assert [r["metric"] for r in csv.DictReader(open(out / "reproduction.csv"))] == list(rows)

@@ -1,0 +1,156 @@
+"""Shared stages of the studies, each returning tables, metrics and figures ready to merge.
+
+* :func:`tune_and_compare` — several tuners on one :class:`~jaxsim.problem.Problem`, equal budgets
+  of simulations: the comparison table, flat metrics, the best-so-far figure, the tuned designs;
+* :func:`responses` — step-response metrics (``step_info``) and the response figure of designs;
+* :func:`robustness` — Monte Carlo of designs over the problem's uncertainty: the percentile table
+  straight from the Monte-Carlo result, flat metrics, a percentile-band figure;
+* :func:`merge` — stages (and extra metrics/notes) into one :class:`~experiments.study.StudyResult`.
+
+Metric names: ``loss_<tuner>``, ``sims_<tuner>``, ``wall_s_<tuner>``, ``loss_at_common_sims_<tuner>``,
+``loss_at_common_seconds_<tuner>``, ``converged_<tuner>`` (1/0), ``gap_to_<ref>_<tuner>``;
+``<term>_mean_<design>``, ``<term>_p05_<design>``, ``<term>_p50_<design>``, ``<term>_p95_<design>``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
+
+import jaxsim.montecarlo as mc
+from experiments import figures
+from experiments.study import StudyResult
+from jaxsim.core.metrics import step_info
+from optim.compare import Comparison, compare, comparison_metrics
+
+
+@dataclass
+class Stage:
+    """Pieces of a :class:`StudyResult`; ``data`` keeps the stage's own objects (comparison,
+    Monte-Carlo results) for anything further."""
+
+    metrics: dict[str, float] = field(default_factory=dict)
+    tables: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
+    figures: dict[str, Any] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+    data: Any = None
+
+
+@dataclass
+class ComparisonStage(Stage):
+    """:func:`tune_and_compare`'s stage; ``designs``: tuner → its best params."""
+
+    comparison: Comparison | None = None
+    designs: dict[str, Any] = field(default_factory=dict)
+
+
+def tune_and_compare(problem: Any, budget: int, tuners: Sequence[str] | dict[str, Any] = ("gradient", "pso", "random"),
+                     *, reference: str | float | None = None, progress: Callable[..., Any] | None = None,
+                     loss_label: str = "loss", table: str = "comparison", figure: str = "loss_vs_budget",
+                     title: str | None = None, **options: Any) -> ComparisonStage:
+    """Every tuner on ``problem`` with ``budget`` simulations (:func:`optim.compare.compare`).
+
+    ``tuners``: standard names (``gradient``, ``pso``, ``random``, ``grid``) or a dict name → ``None``
+    (standard) or ``callable(problem, budget) -> TuneResult`` (a study's own tuner), in table order.
+    ``reference``: a tuner whose loss is the reference (its gap ``gap_to_<ref>_<tuner>`` per tuner, the
+    figure shows the gap), or a known optimum value.  ``options`` go to
+    :func:`optim.compare.standard_tuners` (``key``, ``learning_rate``, ``n_starts``, ``n_particles``,
+    ``batch_size``, ...).  Table rows carry the tuned parameters by coordinate name.
+    """
+    spec = dict(tuners) if isinstance(tuners, dict) else dict.fromkeys(tuners)
+    bar = progress(total=len(spec), desc=f"{problem.name}: tuners", unit="tuner") if progress else None
+    comp = compare(problem, tuners=spec, budget=budget, on_done=(lambda _: bar.update(1)) if bar else None,
+                   **options)
+    if bar is not None:
+        bar.close()
+    metrics = comparison_metrics(comp)
+    ref_loss, ref_name = None, None
+    if isinstance(reference, str):
+        if reference not in comp.results:
+            raise ValueError(f"reference: {reference!r} is not one of the tuners {list(comp.results)}")
+        ref_name, ref_loss = reference, float(comp.results[reference].loss)
+    elif reference is not None:
+        ref_name, ref_loss = "reference", float(reference)
+    rows = []
+    for row in comp.rows:
+        row = dict(row)
+        params = row.pop("params")
+        if isinstance(params, dict):
+            row.update(params)
+        else:
+            row["params"] = params
+        name = row["tuner"]
+        metrics[f"converged_{name}"] = float(row["converged"])
+        if ref_loss is not None:
+            row[f"gap_to_{ref_name}"] = row["best_loss"] - ref_loss
+            metrics[f"gap_to_{ref_name}_{name}"] = float(comp.results[name].loss - ref_loss)
+        rows.append(row)
+    fig = figures.best_so_far(
+        comp, reference=ref_loss, loss_label=loss_label,
+        title=title or f"{problem.name}: tuners on equal budgets ({budget} simulations each)")
+    designs = {name: res.params for name, res in comp.results.items()}
+    return ComparisonStage(metrics=metrics, tables={table: rows}, figures={figure: fig},
+                           notes=[f"budget {budget} simulations per tuner ({problem.sims_per_eval} per loss "
+                                  "evaluation); wall times exclude compilation (compile_s in the table)"],
+                           data=comp, comparison=comp, designs=designs)
+
+
+def responses(problem: Any, designs: dict[str, Any], *, channel: int = 0, y_final: float | None = None,
+              y_label: str = "y", losses: dict[str, float] | None = None, table: str = "step_response",
+              figure: str = "step_responses", title: str | None = None) -> Stage:
+    """Step-response metrics of output ``channel`` for each design (overshoot %, settling and rise time
+    in s; ``y_final`` default: the reference's last value) and the response figure."""
+    rows = []
+    for name, params in designs.items():
+        tr = problem.jitted.simulate(params)
+        yf = float(tr.r[-1, min(channel, tr.r.shape[1] - 1)]) if y_final is None else y_final
+        info = step_info(tr.t, tr.y[:, channel], y_final=yf)
+        flat = problem.space.flat(params) if isinstance(params, dict) else {}
+        rows.append({"design": name, **flat, "overshoot_percent": float(info.overshoot),
+                     "settling_time_s": float(info.settling_time), "rise_time_s": float(info.rise_time)})
+    fig = figures.responses(problem, designs, channel=channel, y_label=y_label, title=title, losses=losses)
+    return Stage(tables={table: rows}, figures={figure: fig})
+
+
+def robustness(problem: Any, designs: dict[str, Any], n: int, key: Any, *, band_runs: int = 64,
+               channel: int = 0, y_label: str = "y", quantiles: tuple[float, ...] = (0.05, 0.5, 0.95),
+               progress: Callable[..., Any] | None = None, table: str = "robustness",
+               figure: str = "mc_bands", block_size: int = 1000) -> Stage:
+    """Monte Carlo of every design over ``problem.uncertainty`` (``n`` runs, fresh noise each; the
+    same ``key`` for every design: common random numbers) and the percentile bands of output
+    ``channel`` over ``band_runs`` draws."""
+    if not problem.uncertainty:
+        raise ValueError(f"problem {problem.name!r} declares no uncertainty to run a Monte Carlo over")
+    rows, metrics, results = [], {}, {}
+    for name, params in designs.items():
+        res = mc.monte_carlo(problem, params, n, key, block_size=min(block_size, n), progress=progress)
+        results[name] = res
+        rows.append({"design": name, **res.row(quantiles)})
+        for term, stats in res.by_name.items():
+            metrics[f"{term}_mean_{name}"] = float(stats.mean)
+            for q in quantiles:
+                metrics[f"{term}_p{round(100 * q):02d}_{name}"] = float(stats.quantile(q))
+    draws = problem.sample(key, band_runs)
+    bands = {name: figures.trajectory_bands(problem, params, draws, channel=channel,
+                                            quantiles=(quantiles[0], 0.5, quantiles[-1]))
+             for name, params in designs.items()}
+    unc = ", ".join(problem.uncertainty)
+    fig = figures.mc_bands(bands, y_label=y_label, quantiles=(quantiles[0], 0.5, quantiles[-1]),
+                           title=f"{problem.name}: {band_runs} draws of {unc}")
+    return Stage(metrics=metrics, tables={table: rows}, figures={figure: fig},
+                 notes=[f"Monte Carlo: {n} runs per design over {unc}, common random numbers across designs; "
+                        "quantiles from the streaming sketch (relative error ≤ 1e-3)"], data=results)
+
+
+def merge(*stages: Stage, metrics: dict[str, float] | None = None, notes: Sequence[str] = (),
+          assumptions: dict[str, Any] | None = None) -> StudyResult:
+    """One :class:`StudyResult` from the stages (later stages win on a name clash) plus extras."""
+    out = StudyResult(assumptions=dict(assumptions or {}))
+    for st in stages:
+        out.metrics.update(st.metrics)
+        out.tables.update(st.tables)
+        out.figures.update(st.figures)
+        out.notes.extend(st.notes)
+    out.metrics.update(metrics or {})
+    out.notes.extend(notes)
+    return out
