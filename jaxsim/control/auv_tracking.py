@@ -117,7 +117,7 @@ def _init(params: TrackingParams, r0: Any, y0: jax.Array) -> jax.Array:
     return jnp.zeros(())
 
 
-def _step(params: TrackingParams, state: jax.Array, r: Any, y: jax.Array, dt: Any) -> tuple[jax.Array, jax.Array]:
+def _step(params: TrackingParams, state: jax.Array, r: Any, y: jax.Array, dt: Any, t: Any) -> tuple[jax.Array, jax.Array]:
     t, x, target = y[0], y[1:13], y[13:22].reshape(3, 3)
     tau = control_force(params, x, target)
     return state, jnp.where(t >= params.t_start - 1e-9, tau, 0.0)

@@ -36,9 +36,9 @@ def test_sliding_term_and_start_time():
     np.testing.assert_allclose(np.abs(tau - tau_n), 100.0, rtol=1e-9)
     smooth = auv_tracking(switch="tanh", width=1e-9)
     np.testing.assert_allclose(control_force(smooth.params, x, target), tau, rtol=1e-9)
-    _, u = sign.step(sign.params, sign.init(sign.params, None, None), None, _read(3.0, x, target), 1e-3)
+    _, u = sign.step(sign.params, sign.init(sign.params, None, None), None, _read(3.0, x, target), 1e-3, 3.0)
     assert np.all(np.asarray(u) == 0.0)
-    _, u = sign.step(sign.params, sign.init(sign.params, None, None), None, _read(4.0, x, target), 1e-3)
+    _, u = sign.step(sign.params, sign.init(sign.params, None, None), None, _read(4.0, x, target), 1e-3, 4.0)
     np.testing.assert_allclose(u, tau)
 
 
