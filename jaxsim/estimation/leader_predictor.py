@@ -51,12 +51,12 @@ import jax
 import jax.numpy as jnp
 
 from jaxsim.core.pytree import pytree_dataclass, static_field
+from jaxsim.core.rotations import rotation_z
 from jaxsim.core.system import Estimator
 from jaxsim.core.validation import check_finite, check_positive, check_shape
 from jaxsim.estimation import kalman
 from jaxsim.estimation.alpha_beta import poly_window_weights
 from jaxsim.estimation.types import GaussianState
-from jaxsim.plants.marine import rotation_z
 
 MODES = ("kalman", "polynomial", "hold")
 
