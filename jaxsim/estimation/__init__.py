@@ -8,7 +8,8 @@ steps), built by :func:`~.lgssm.linear_member`, :func:`~.ekf.ekf_member`,
 and :func:`~.adapters.filter_estimator` (closed loop).
 
 Modules (one idea each): :mod:`~.kalman` (predict/update, Joseph and square-root),
-:mod:`~.lgssm` (model + scanned filter, masking, gating), :mod:`~.steady_state`,
+:mod:`~.lgssm` (model + scanned filter, masking, gating), :mod:`~.steady_state` (deprecated aliases of
+:mod:`jaxsim.control.kalman_gain`, the one steady-state Kalman API),
 :mod:`~.kalman_bucy`, :mod:`~.ekf`, :mod:`~.ukf`, :mod:`~.cubature`, :mod:`~.smoothers`,
 :mod:`~.parallel`, :mod:`~.gating`, :mod:`~.imm`, :mod:`~.mmae`, :mod:`~.particle`,
 :mod:`~.alpha_beta`, :mod:`~.observers`, :mod:`~.allan`, :mod:`~.shared_gain` (Monte Carlo
