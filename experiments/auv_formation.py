@@ -217,7 +217,7 @@ def metric_fold(cfg: Config, t_final: float, loss_start: float | None = None):
         t = tick.t
         e, e_dot = tick_errors(tick.x, t)
         n = jnp.linalg.norm(e)
-        est = jnp.linalg.norm(tick.x_hat[13:16] - formation.target_point(formation.LeaderParams(), t))
+        est = jnp.linalg.norm(tick.x_hat.position - formation.target_point(formation.LeaderParams(), t))
         on = t >= start - 1e-9
         ss = _window(t, ss_lo, ss_hi)
         w32 = _window(t, t32_lo, t32_hi)
@@ -355,7 +355,7 @@ def _fig_reproduction(tr: Any, cfg: Config) -> Any:
     e, e_dot = np.asarray(e), np.asarray(e_dot)
     lead = formation.LeaderParams()
     truth = np.asarray(jax.vmap(lambda s: formation.target_point(lead, s))(tr.t))
-    est_err = np.linalg.norm(np.asarray(tr.x_hat)[:, 13:16] - truth, axis=1)
+    est_err = np.linalg.norm(np.asarray(tr.x_hat.position) - truth, axis=1)
     fig, axes = plt.subplots(2, 2, figsize=(11, 6.5))
     for i, lab in enumerate("xyz"):
         axes[0, 0].plot(t, e[:, i], label=f"{lab}_FR")

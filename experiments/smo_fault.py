@@ -103,8 +103,8 @@ def _pid_init(p, r0, y0):
     return pid_init(p, r0, y0[:1])
 
 
-def _pid_step(p, s, r, y, ts):
-    return pid_step(p, s, r, y[:1], ts)
+def _pid_step(p, s, r, y, ts, t):
+    return pid_step(p, s, r, y[:1], ts, t)
 
 
 def position_loop(cfg: Config, plant_params: sd.ServoParams, noise: jax.Array) -> ClosedLoop:

@@ -7,6 +7,7 @@ from typing import Any, NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
+from jaxsim.core.validation import check_int  # noqa: F401  (one integer check; re-exported for tune, pso, search)
 from jaxsim.problem.reparam import check_bounds
 
 
@@ -101,8 +102,3 @@ def check_some_loss_finite(best_loss: float, where: str, hint: str = "") -> None
                          f"return{'; ' + hint if hint else ''}")
 
 
-def check_int(name: str, value: Any, minimum: int = 1) -> int:
-    """Require an integer ``≥ minimum`` (bools rejected); return it as ``int``."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise ValueError(f"{name}: must be an integer ≥ {minimum}, got {value!r}")
-    return int(value)

@@ -51,7 +51,7 @@ def scheduled_loss(problem: PIDTuning, n_seg: int):
     def init(table, r0, y0):
         return pid_init(base, r0, y0), jnp.asarray(0)
 
-    def step(table, state, r, y, dt):
+    def step(table, state, r, y, dt, t):
         s, k = state
         seg = jnp.minimum(k // per_seg, n_seg - 1)
         p = dataclasses.replace(base, kp=table[0, seg], ki=table[1, seg], kd=table[2, seg])

@@ -24,8 +24,10 @@ follower acceleration and no numerical differentiation (which would spike at eve
 
 Before ``t_start`` (the follower starts 4 s after the leader, paper line 1112) ``τ = 0``.
 
-Controller input each tick: ``[t, x_F (12), X (3), V (3), A (3)]`` as read from
-:mod:`jaxsim.estimation.leader_predictor`.
+Controller input each tick: a :class:`~jaxsim.estimation.leader_predictor.LeaderEstimate` (or
+any object with its fields ``follower (12,)`` and ``target (3, 3)``), as read from
+:func:`jaxsim.estimation.leader_predictor.leader_predictor`; the start gate uses the tick time
+``t`` the rollout passes to ``step``.
 """
 
 from __future__ import annotations
@@ -117,9 +119,9 @@ def _init(params: TrackingParams, r0: Any, y0: jax.Array) -> jax.Array:
     return jnp.zeros(())
 
 
-def _step(params: TrackingParams, state: jax.Array, r: Any, y: jax.Array, dt: Any) -> tuple[jax.Array, jax.Array]:
-    t, x, target = y[0], y[1:13], y[13:22].reshape(3, 3)
-    tau = control_force(params, x, target)
+def _step(params: TrackingParams, state: jax.Array, r: Any, y: Any, dt: Any, t: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """``y``: a ``LeaderEstimate`` (fields ``follower``, ``target``); ``t``: tick time (s)."""
+    tau = control_force(params, y.follower, y.target)
     return state, jnp.where(t >= params.t_start - 1e-9, tau, 0.0)
 
 

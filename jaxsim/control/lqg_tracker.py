@@ -98,7 +98,7 @@ def _ctrl_init(params: LQGTrackerParams, r0: jax.Array, y0: jax.Array) -> jax.Ar
     return jnp.zeros((), dtype=params.k.dtype)
 
 
-def _ctrl_step(params: LQGTrackerParams, state, r, x_hat, dt):
+def _ctrl_step(params: LQGTrackerParams, state, r, x_hat, dt, t):
     return state, control_law(params, r, x_hat)
 
 

@@ -19,7 +19,7 @@ def _init(u_seq: jax.Array, r0: jax.Array, y0: jax.Array) -> jax.Array:
     return jnp.asarray(0)
 
 
-def _step(u_seq: jax.Array, k: jax.Array, r: jax.Array, y: jax.Array, dt) -> tuple[jax.Array, jax.Array]:
+def _step(u_seq: jax.Array, k: jax.Array, r: jax.Array, y: jax.Array, dt, t) -> tuple[jax.Array, jax.Array]:
     return k + 1, u_seq[jnp.minimum(k, u_seq.shape[0] - 1)]
 
 
@@ -36,7 +36,7 @@ def _ff_init(params: None, r0: jax.Array, y0: jax.Array) -> tuple:
     return ()
 
 
-def _ff_step(params: None, state: tuple, r: jax.Array, y: jax.Array, dt: float) -> tuple[tuple, jax.Array]:
+def _ff_step(params: None, state: tuple, r: jax.Array, y: jax.Array, dt: float, t) -> tuple[tuple, jax.Array]:
     return state, r
 
 

@@ -64,9 +64,10 @@ def pid_init(p: PIDParams, r0: jax.Array, y0: jax.Array) -> PIDState:
 
 
 def pid_step(
-    p: PIDParams, s: PIDState, r: jax.Array, y: jax.Array, ts: jax.Array
+    p: PIDParams, s: PIDState, r: jax.Array, y: jax.Array, ts: jax.Array, t: Any = None
 ) -> tuple[PIDState, jax.Array]:
-    """One controller tick of period ``ts``; returns the new state and the saturated output."""
+    """One controller tick of period ``ts`` (s) at tick time ``t`` (s; unused: the law is
+    time-invariant); returns the new state and the saturated output."""
     e = r - y
     sig = _deriv_signal(p, r, y)
     deriv = (p.tf * s.deriv + (sig - s.prev)) / (p.tf + ts)

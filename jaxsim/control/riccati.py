@@ -61,7 +61,14 @@ from jaxsim.control._riccati_common import (
 from jaxsim.control._symplectic_balance import balancing_exponents, scale_problem
 from jaxsim.control.lyapunov import continuous_lyapunov_unchecked, discrete_lyapunov_unchecked
 from jaxsim.control.pbh import uncontrollable_modes
-from jaxsim.core.validation import check_finite, check_square, is_concrete
+from jaxsim.core.validation import (
+    check_finite,
+    check_positive_definite,
+    check_positive_semidefinite,  # noqa: F401  (re-exported: lqr and kalman_gain import it from here)
+    check_square,
+    check_symmetric,
+    is_concrete,
+)
 
 __all__ = [
     "MarginalStabilityWarning", "RiccatiDiagnostics", "balanced_data", "care_residual", "check_stabilising", "dare_gain", "dare_residual",
@@ -131,36 +138,6 @@ def _as_2d(name: str, m, rows: int | None = None) -> jax.Array:
     if m.ndim != 2:
         raise ValueError(f"{name}: expected a 2-D matrix, got shape {tuple(m.shape)}")
     return m
-
-
-def check_symmetric(name: str, m: jax.Array) -> None:
-    """Raise if a concrete ``m`` is not symmetric to within ``100·eps·‖m‖₁`` (SciPy's rule)."""
-    if not is_concrete(m):
-        return
-    arr = np.asarray(m)
-    tol = 100 * np.spacing(max(np.linalg.norm(arr, 1), np.finfo(float).tiny))
-    if np.linalg.norm(arr - arr.T, 1) > tol:
-        raise ValueError(f"{name}: must be symmetric, got {arr!r}")
-
-
-def check_positive_definite(name: str, m: jax.Array) -> None:
-    """Raise if a concrete symmetric ``m`` is not positive definite."""
-    if not is_concrete(m):
-        return
-    arr = np.asarray(m)
-    w = np.linalg.eigvalsh(0.5 * (arr + arr.T))
-    if w.size and w[0] <= w[-1] * 1e3 * np.finfo(float).eps:
-        raise ValueError(f"{name}: must be symmetric positive definite, eigenvalues {w!r}")
-
-
-def check_positive_semidefinite(name: str, m: jax.Array) -> None:
-    """Raise if a concrete symmetric ``m`` has a clearly negative eigenvalue."""
-    if not is_concrete(m):
-        return
-    arr = np.asarray(m)
-    w = np.linalg.eigvalsh(0.5 * (arr + arr.T))
-    if w.size and w[0] < -1e3 * np.finfo(float).eps * max(abs(w[-1]), 1.0):
-        raise ValueError(f"{name}: must be symmetric positive semi-definite, eigenvalues {w!r}")
 
 
 def prepare_riccati_inputs(a, b, q, r, names=("a", "b", "q", "r"), *, r_definite: bool = True):

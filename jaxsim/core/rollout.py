@@ -7,7 +7,8 @@ At tick ``k`` (time ``t_k = k·Ts``, ``Ts`` the controller period):
 2. the estimator, if any, updates with that measurement — selected by a mask, not a Python
    branch — and the controller sees ``estimator.read(...)``; without an estimator it sees the
    held measurement;
-3. the controller computes ``u_k``, held constant (zero-order hold) until ``t_{k+1}``;
+3. the controller computes ``u_k = step(params, state, r(t_k), seen, Ts, t_k)``, held constant
+   (zero-order hold) until ``t_{k+1}``;
 4. the estimator predicts to ``t_{k+1}``;
 5. the plant integrates ``substeps = Ts/dt`` fixed steps of ``dt`` with the chosen solver; the
    disturbance signal is evaluated at every stage time and enters through ``loop.actuate``.
@@ -22,6 +23,7 @@ simulation itself still runs every tick).
 
 from __future__ import annotations
 
+import inspect
 from dataclasses import dataclass
 from typing import Any, Callable, NamedTuple
 
@@ -182,6 +184,21 @@ def _check_plant(plant: Plant, x0: jax.Array, t0: jax.Array) -> None:
                         shape=(plant.n_states,))
 
 
+def _check_step_signature(ctrl: Controller) -> None:
+    """``step`` must accept ``(params, state, r, y, dt, t)``: a controller written for the former
+    five-argument ``step`` would otherwise fail deep inside the trace with a bare ``TypeError``."""
+    try:
+        sig = inspect.signature(ctrl.step)
+    except (TypeError, ValueError):  # no introspectable signature (a builtin, say): let the trace tell
+        return
+    try:
+        sig.bind(*range(6))
+    except TypeError:
+        raise ValueError(
+            f"controller {ctrl.name!r}: step must accept (params, state, r, y, dt, t) — six positional "
+            f"arguments, t the tick time in s — got the signature {sig}") from None
+
+
 def _check_input_shapes(loop: ClosedLoop, u: jax.ShapeDtypeStruct, r0: jax.Array, t0: jax.Array) -> None:
     """The controller output (given the reference) and the disturbed plant input must be ``(m,)``."""
     plant, ctrl = loop.plant, loop.controller
@@ -193,7 +210,7 @@ def _check_input_shapes(loop: ClosedLoop, u: jax.ShapeDtypeStruct, r0: jax.Array
                 f"n_outputs={p}; controller {ctrl.name!r} then returns u of shape {tuple(u.shape)}, "
                 f"expected ({m},) (n_inputs={m})")
         raise ValueError(
-            f"controller {ctrl.name!r}: step(params, state, r, y, dt) returns u of shape {tuple(u.shape)}, "
+            f"controller {ctrl.name!r}: step(params, state, r, y, dt, t) returns u of shape {tuple(u.shape)}, "
             f"expected ({m},) for plant {plant.name!r} (n_inputs={m})")
     d0 = jax.eval_shape(loop.disturbance, t0)
     actuated = jax.eval_shape(loop.actuate, u, d0)
@@ -231,6 +248,7 @@ def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | N
     t0 = jnp.asarray(0.0, dtype)
     plant, ctrl, est = loop.plant, loop.controller, loop.estimator
     _check_plant(plant, x0, t0)
+    _check_step_signature(ctrl)
 
     def measure(x: jax.Array, t: jax.Array, k: jax.Array) -> jax.Array:
         y = plant.h(x)
@@ -253,7 +271,7 @@ def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | N
             updated = est.update(est.params, c.est, y_held)
             est_state = jax.tree_util.tree_map(lambda a, b: jnp.where(arrived, a, b), updated, c.est)
             seen = est.read(est.params, est_state)
-        ctrl_state, u = ctrl.step(ctrl.params, c.ctrl, r, seen, ts)
+        ctrl_state, u = ctrl.step(ctrl.params, c.ctrl, r, seen, ts, t)
         if est is not None:
             est_state = est.predict(est.params, est_state, u, ts)
         x_next = advance_plant(c.x, u, t)
@@ -271,7 +289,7 @@ def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | N
         est=None if est is None else est.init(est.params, y0),
     )
     seen0 = y0 if est is None else est.read(est.params, carry.est)
-    u0 = jax.eval_shape(lambda c: ctrl.step(ctrl.params, c, r0, seen0, ts)[1], carry.ctrl)
+    u0 = jax.eval_shape(lambda c: ctrl.step(ctrl.params, c, r0, seen0, ts, t0)[1], carry.ctrl)
     _check_input_shapes(loop, u0, r0, t0)
     return tick, carry, n_ticks
 

@@ -15,6 +15,9 @@ function               formula                               boundary layer     
 :func:`ratio_sign`     ``s/(|s| + ε)``                       ``|s| ≲ ε`` (value ½ at ``|s| = ε``) C¹; slope ``1/ε`` at 0
 =====================  ====================================  ==================================  ==========================
 
+:func:`smooth_sign` is :func:`tanh_sign` for ``width > 0`` and :func:`sign` for ``width = 0``, chosen
+by value (not by name), so a model can carry the smoothing as a tunable parameter.
+
 ``ratio_sign`` is the "equivalent injection" formula ``v_eq = e/(|e| + ε)`` of sliding-mode fault
 identification (seed 000, paper 2, eq. 3.6).  Its tail converges slowly (error ``ε/|s|``), so for
 the same slope at zero it approximates ``sign`` worse than ``tanh_sign`` far from the surface.
@@ -52,6 +55,17 @@ def tanh_sign(s: jax.Array, width: jax.Array | float) -> jax.Array:
     """``tanh(s/width)``; ``width`` is the temperature τ (within 4 % of ``sign`` for ``|s| ≥ 2τ``)."""
     check_positive("width", width)
     return jnp.tanh(s / width)
+
+
+def smooth_sign(s: jax.Array, width: jax.Array | float) -> jax.Array:
+    """``tanh(s/width)`` where ``width > 0``, the exact ``sign(s)`` where ``width = 0``.
+
+    For a smoothing that is a *parameter* (an array leaf a study switches off for reporting and on
+    for the gradient path, e.g. dry friction ``sgn v`` of :mod:`jaxsim.plants.trms`): both branches
+    share one compiled function, and the gradient is NaN-free for either (the division is guarded).
+    ``width`` must be ``≥ 0`` (the caller validates it; a negative width gives ``sign``)."""
+    smooth = width > 0
+    return jnp.where(smooth, jnp.tanh(s / jnp.where(smooth, width, 1.0)), jnp.sign(s))
 
 
 def ratio_sign(s: jax.Array, width: jax.Array | float) -> jax.Array:

@@ -12,7 +12,8 @@ Signatures (``x`` plant state ``(n,)``, ``u`` plant input ``(m,)``, ``y`` output
 ``r`` reference ``(k,)``, ``t`` time, ``dt`` step or period in the same unit):
 
 * plant: ``dynamics(params, x, u, t) -> ẋ``, ``output(params, x) -> y``;
-* controller: ``init(params, r0, y0) -> state``, ``step(params, state, r, y, dt) -> (state, u)``;
+* controller: ``init(params, r0, y0) -> state``, ``step(params, state, r, y, dt, t) -> (state, u)``
+  (``t`` the tick time, see :class:`Controller`);
 * sensor: ``measure(params, key, y, t) -> y_meas``;
 * estimator: ``init(params, y0) -> state``, ``predict(params, state, u, dt) -> state``,
   ``update(params, state, y_meas) -> state``, ``read(params, state) -> what the controller sees``.
@@ -53,11 +54,27 @@ class Plant:
 
 @pytree_dataclass
 class Controller:
-    """A discrete-time controller run at its own period with zero-order hold on its output."""
+    """A discrete-time controller run at its own period with zero-order hold on its output.
+
+    ``init(params, r0, y0) -> state`` gives the state before the first tick from the reference
+    ``r0 (k,)`` and what the controller sees at ``t = 0`` (``y0``).
+
+    ``step(params, state, r, y, dt, t) -> (state, u)`` is one tick:
+
+    * ``r`` ``(k,)``: the reference at the tick;
+    * ``y``: what the controller sees — the held measurement ``(p,)``, or the estimator's
+      ``read(...)`` (any pytree, e.g. a NamedTuple) when the loop has an estimator;
+    * ``dt``: the controller period ``Ts`` (s), the interval ``u`` is held for;
+    * ``t``: the tick time ``t_k = k·Ts`` (s) — for time-varying laws, start-up gates and gain
+      schedules (ignore it otherwise);
+    * returns the new state and ``u (m,)``, held constant (zero-order hold) until ``t_k + Ts``.
+
+    Both are pure; ``params`` is a pytree (tunable, vmappable), the functions are static.
+    """
 
     params: Any
-    init: Callable[[Any, jax.Array, jax.Array], Any] = static_field()
-    step: Callable[[Any, Any, jax.Array, jax.Array, Any], tuple[Any, jax.Array]] = static_field()
+    init: Callable[[Any, jax.Array, Any], Any] = static_field()
+    step: Callable[[Any, Any, jax.Array, Any, Any, jax.Array], tuple[Any, jax.Array]] = static_field()
     name: str = static_field(default="controller")
 
 

@@ -98,13 +98,36 @@ def check_positive_scalar(name: str, x: Any) -> float:
     return value
 
 
+def check_int(name: str, x: Any, low: int = 1, high: int | None = None) -> int:
+    """Require an integer in ``[low, high]`` (``high=None``: no upper bound) and return it as ``int``.
+
+    Accepted: Python and NumPy integers, and integral floats such as ``4.0`` or ``1e6``; rejected:
+    bools, non-integral or non-finite numbers, arrays, traced values (sizes and counts are static).
+    The message names ``name`` and says what was wanted: ``"a positive integer"`` for the default
+    range, else ``"an integer"`` then the range.
+    """
+    positive = low == 1 and high is None
+    what = "a positive integer" if positive else "an integer"
+    if isinstance(x, (int, np.integer)) and not isinstance(x, (bool, np.bool_)):
+        value = int(x)  # exact, also beyond 2**53
+    else:
+        real = _static_real(name, x, what)
+        if not math.isfinite(real) or real != math.floor(real):
+            raise ValueError(f"{name}: must be {what}, got {x!r}")
+        value = int(real)
+    if value < low or (high is not None and value > high):
+        if positive:
+            raise ValueError(f"{name}: must be a positive integer, got {x!r}")
+        rng = f"an integer ≥ {low}" if high is None else f"in [{low}, {high}]"
+        raise ValueError(f"{name}: must be {rng}, got {x!r}")
+    return value
+
+
 def check_positive_int(name: str, x: Any) -> int:
     """Require a positive integer (a Python or NumPy integer, or an integral float such as ``4.0``;
-    not a bool); return it as ``int``.  For static sizes, so ``x`` must be concrete."""
-    value = _static_real(name, x, "a positive integer")
-    if not math.isfinite(value) or value != math.floor(value) or value < 1:
-        raise ValueError(f"{name}: must be a positive integer, got {x!r}")
-    return int(value)
+    not a bool); return it as ``int``.  For static sizes, so ``x`` must be concrete.
+    (:func:`check_int` with its default range.)"""
+    return check_int(name, x)
 
 
 def check_probabilities(name: str, p: Any) -> None:
@@ -145,6 +168,43 @@ def check_square(name: str, m: Any) -> None:
     shape = np.shape(m)
     if len(shape) != 2 or shape[0] != shape[1]:
         raise ValueError(f"{name}: expected a square matrix, got shape {tuple(shape)}")
+
+
+def check_symmetric(name: str, m: Any) -> None:
+    """Require a symmetric matrix to within ``100·eps·‖m‖₁`` (the rule of SciPy's Riccati solvers,
+    which the toolkit's Riccati solvers share); values only when concrete.  For a covariance with a
+    relative tolerance use :func:`check_covariance`."""
+    if not is_concrete(m):
+        return
+    arr = np.asarray(m)
+    tol = 100 * np.spacing(max(np.linalg.norm(arr, 1), np.finfo(float).tiny))
+    if np.linalg.norm(arr - arr.T, 1) > tol:
+        raise ValueError(f"{name}: must be symmetric, got {arr!r}")
+
+
+def _symmetric_eigenvalues(m: Any) -> np.ndarray:
+    arr = np.asarray(m)
+    return np.linalg.eigvalsh(0.5 * (arr + arr.T))
+
+
+def check_positive_definite(name: str, m: Any) -> None:
+    """Require the symmetric part of ``m`` positive definite: smallest eigenvalue above
+    ``10³·eps·λ_max`` (a Riccati weight ``R ≻ 0``); values only when concrete."""
+    if not is_concrete(m):
+        return
+    w = _symmetric_eigenvalues(m)
+    if w.size and w[0] <= w[-1] * 1e3 * np.finfo(float).eps:
+        raise ValueError(f"{name}: must be symmetric positive definite, eigenvalues {w!r}")
+
+
+def check_positive_semidefinite(name: str, m: Any) -> None:
+    """Require the symmetric part of ``m`` positive semi-definite: no eigenvalue below
+    ``−10³·eps·max(|λ_max|, 1)`` (a Riccati weight ``Q ⪰ 0``); values only when concrete."""
+    if not is_concrete(m):
+        return
+    w = _symmetric_eigenvalues(m)
+    if w.size and w[0] < -1e3 * np.finfo(float).eps * max(abs(w[-1]), 1.0):
+        raise ValueError(f"{name}: must be symmetric positive semi-definite, eigenvalues {w!r}")
 
 
 def check_covariance(

@@ -1,7 +1,7 @@
 """The TRMS tracking task of the ``trms_lqr_tuning`` study as a brax env.
 
 Scenario, trim point, references and per-step loss are the study's own
-(:class:`experiments.trms_problem.TRMSTuning`, reused, not re-derived): the reward of a step is
+(:class:`jaxsim.problem.trms.TRMSTuning`, reused, not re-derived): the reward of a step is
 ``−TRMSTuning.step_loss`` — per-step ITAE + ρ·energy + κ·saturation excess over one controller
 period — so ``−Σ rewards`` over the horizon is the study's loss of that simulation without the
 stability penalty (which only applies to linear designs).
@@ -20,14 +20,13 @@ import jax.numpy as jnp
 
 from jaxsim.envs.plant_env import PlantEnv, Task
 from jaxsim.plants.trms import trms_plant
+from jaxsim.problem.trms import Scenario, TRMSTuning
 
 
 def trms_task(problem: Any = None, exact_friction: bool = False, x0_spread: Any = 0.0) -> Task:
     """The :class:`~jaxsim.envs.plant_env.Task` of a ``TRMSTuning`` problem (default: the study's
     default scenario); ``x0_spread`` perturbs the trim state on reset (e.g. ``(0.05, 0.05, 0, …)``)."""
     if problem is None:
-        from experiments.trms_problem import Scenario, TRMSTuning  # the study's task, reused
-
         problem = TRMSTuning(Scenario())
     plant = trms_plant(problem.plant_params(exact_friction))
     u_max = plant.params.u_max

@@ -2,8 +2,14 @@
 Allan variance.  Every kernel is a pure JAX function (jit, vmap, grad, lax.scan); filters come as
 step functions (online use) and scanned runs (batched use) built from the same steps.
 
+Filters share one interface, :class:`~.filtering.FilterMember` (parameters + ``predict``/``update``
+steps), built by :func:`~.lgssm.linear_member`, :func:`~.ekf.ekf_member`,
+:func:`~.ukf.sigma_point_member`/:func:`~.ukf.ukf_member` and taken by the scanned filters, the IMM
+and :func:`~.adapters.filter_estimator` (closed loop).
+
 Modules (one idea each): :mod:`~.kalman` (predict/update, Joseph and square-root),
-:mod:`~.lgssm` (model + scanned filter, masking, gating), :mod:`~.steady_state`,
+:mod:`~.lgssm` (model + scanned filter, masking, gating), :mod:`~.steady_state` (deprecated aliases of
+:mod:`jaxsim.control.kalman_gain`, the one steady-state Kalman API),
 :mod:`~.kalman_bucy`, :mod:`~.ekf`, :mod:`~.ukf`, :mod:`~.cubature`, :mod:`~.smoothers`,
 :mod:`~.parallel`, :mod:`~.gating`, :mod:`~.imm`, :mod:`~.mmae`, :mod:`~.particle`,
 :mod:`~.alpha_beta`, :mod:`~.observers`, :mod:`~.allan`, :mod:`~.shared_gain` (Monte Carlo
@@ -17,7 +23,13 @@ sliding-window LS + multi-rate Kalman prediction of a target point between camer
 their soft surrogate).
 """
 
-from jaxsim.estimation.adapters import ekf_estimator, kalman_estimator, luenberger_estimator, ukf_estimator
+from jaxsim.estimation.adapters import (
+    ekf_estimator,
+    filter_estimator,
+    kalman_estimator,
+    luenberger_estimator,
+    ukf_estimator,
+)
 from jaxsim.estimation.allan import AllanResult, allan_variance, cluster_sizes, random_walk_avar, white_noise_avar
 from jaxsim.estimation.alpha_beta import (
     AlphaBetaResult,
@@ -31,22 +43,19 @@ from jaxsim.estimation.alpha_beta import (
     window_bank,
 )
 from jaxsim.estimation.cubature import CubaturePoints, cubature_kalman_filter
-from jaxsim.estimation.ekf import ekf_predict, ekf_update, extended_kalman_filter
+from jaxsim.estimation.ekf import ekf_member, ekf_predict, ekf_update, extended_kalman_filter
+from jaxsim.estimation.filtering import FilterMember
 from jaxsim.estimation.gating import chi2_bounds, chi2_gate, chi2_threshold, fraction_inside, nees, nis
 from jaxsim.estimation.imm import (
     IMM,
-    FilterMember,
     IMMResult,
     IMMState,
-    ekf_member,
     imm,
     imm_estimate,
     imm_filter,
     imm_init,
     imm_predict,
     imm_update,
-    linear_member,
-    ukf_member,
 )
 from jaxsim.estimation.kalman import condition, predict, sqrt_predict, sqrt_update, update
 from jaxsim.estimation.kalman_bucy import (
@@ -55,7 +64,7 @@ from jaxsim.estimation.kalman_bucy import (
     kalman_bucy_step,
     steady_state_kalman_bucy,
 )
-from jaxsim.estimation.lgssm import LinearGaussianSSM, kalman_filter, lgssm, sample
+from jaxsim.estimation.lgssm import LinearGaussianSSM, kalman_filter, lgssm, linear_member, sample
 from jaxsim.estimation.mmae import (
     BankResult,
     SPRTResult,
@@ -106,6 +115,8 @@ from jaxsim.estimation.types import FilterResult, GaussianState, Innovation, Smo
 from jaxsim.estimation.ukf import (
     MerweScaledSigmaPoints,
     sigma_point_filter,
+    sigma_point_member,
+    ukf_member,
     ukf_predict,
     ukf_update,
     unscented_kalman_filter,

@@ -5,6 +5,11 @@ The rollout calls ``update(params, state, y)`` when a measurement arrives (selec
 controller tick with the held control ``u``.  The model must be discretised at the controller
 period (``dt`` is not used by these discrete filters).
 
+:func:`filter_estimator` turns any :class:`~jaxsim.estimation.filtering.FilterMember` (the Gaussian
+filters' one interface, shared with the scanned filters and the IMM) into an ``Estimator``;
+:func:`kalman_estimator`, :func:`ekf_estimator` and :func:`ukf_estimator` are it applied to the
+Kalman, extended and unscented members of a model.
+
 ``read="mean"`` gives the controller the state estimate ``(n,)``; ``read="output"`` the estimated
 output ``H m`` (linear) or ``h(m)`` (nonlinear), a drop-in for the measurement a controller expects.
 """
@@ -18,12 +23,14 @@ import jax.numpy as jnp
 
 from jaxsim.core.pytree import pytree_dataclass
 from jaxsim.core.system import Estimator
+from jaxsim.core.validation import check_covariance, check_finite
 from jaxsim.estimation import kalman
-from jaxsim.estimation.ekf import ekf_predict, ekf_update
-from jaxsim.estimation.lgssm import LinearGaussianSSM, validate_model
-from jaxsim.estimation.nonlinear import NonlinearSSM, validate_nonlinear
+from jaxsim.estimation.ekf import ekf_member
+from jaxsim.estimation.filtering import FilterMember
+from jaxsim.estimation.lgssm import LinearGaussianSSM, linear_member, validate_model
+from jaxsim.estimation.nonlinear import NonlinearSSM
 from jaxsim.estimation.types import GaussianState
-from jaxsim.estimation.ukf import MerweScaledSigmaPoints, check_merwe, ukf_predict, ukf_update
+from jaxsim.estimation.ukf import ukf_member
 
 READS = ("mean", "output")
 
@@ -33,31 +40,54 @@ def _check_read(read: str) -> None:
         raise ValueError(f"read: expected one of {READS}, got {read!r}")
 
 
-def _init(params, y0):
-    model = params[0] if isinstance(params, tuple) else params
-    return GaussianState(model.m0, model.P0)
+@pytree_dataclass
+class FilterEstimatorParams:
+    """The filter (a :class:`~jaxsim.estimation.filtering.FilterMember`) and its initial belief
+    ``N(m0 (n,), P0 (n, n))``."""
+
+    member: FilterMember
+    m0: jax.Array
+    P0: jax.Array
 
 
-def _read_mean(params, state):
+def _init(p: FilterEstimatorParams, y0: jax.Array) -> GaussianState:
+    return GaussianState(p.m0, p.P0)
+
+
+def _predict(p: FilterEstimatorParams, state: GaussianState, u: jax.Array, dt: Any) -> GaussianState:
+    return p.member.predict(p.member.params, state, u)
+
+
+def _update(p: FilterEstimatorParams, state: GaussianState, y: jax.Array) -> GaussianState:
+    return p.member.update(p.member.params, state, y, None)[0]
+
+
+def _read_mean(p: FilterEstimatorParams, state: GaussianState) -> jax.Array:
     return state.mean
 
 
-# linear Kalman filter ------------------------------------------------------------------------
-
-def _kf_predict(model, state, u, dt):
-    return kalman.predict(state, model.F, model.Q, model.B, u if model.B is not None else None)
+def _read_output(p: FilterEstimatorParams, state: GaussianState) -> jax.Array:
+    return p.member.observe(p.member.params, state.mean)
 
 
-def _kf_update_joseph(model, state, y):
-    return kalman.update(state, y, model.H, model.R, form="joseph")[0]
-
-
-def _kf_update_standard(model, state, y):
-    return kalman.update(state, y, model.H, model.R, form="standard")[0]
-
-
-def _kf_read_output(model, state):
-    return model.H @ state.mean
+def filter_estimator(member: FilterMember, m0: Any, P0: Any, *, read: str = "mean",
+                     name: str = "filter") -> Estimator:
+    """Any :class:`~jaxsim.estimation.filtering.FilterMember` as a closed-loop :class:`Estimator`
+    starting from ``N(m0 (n,), P0 (n, n))``; ``read`` ``"mean"`` (``(n,)``) or ``"output"``
+    (``member.observe`` of the mean, ``(p,)``; the member must define ``observe``).  Every
+    measurement the rollout delivers is used in full (no mask)."""
+    _check_read(read)
+    if not isinstance(member, FilterMember):
+        raise ValueError(f"member: expected a FilterMember, got {type(member).__name__}")
+    if read == "output" and member.observe is None:
+        raise ValueError("read: 'output' needs the member's observe function (it is None)")
+    m0 = jnp.asarray(m0)
+    if m0.ndim != 1:
+        raise ValueError(f"m0: expected shape (n,), got {tuple(m0.shape)}")
+    check_finite("m0", m0)
+    check_covariance("P0", P0, m0.shape[0])
+    params = FilterEstimatorParams(member, m0, jnp.asarray(P0))
+    return Estimator(params, _init, _predict, _update, _read_mean if read == "mean" else _read_output, name=name)
 
 
 def kalman_estimator(model: LinearGaussianSSM, *, form: str = "joseph", read: str = "mean") -> Estimator:
@@ -68,42 +98,14 @@ def kalman_estimator(model: LinearGaussianSSM, *, form: str = "joseph", read: st
     if form not in kalman.UPDATE_FORMS:
         raise ValueError(f"form: expected one of {kalman.UPDATE_FORMS}, got {form!r}")
     _check_read(read)
-    update = _kf_update_joseph if form == "joseph" else _kf_update_standard
-    return Estimator(model, _init, _kf_predict, update,
-                     _read_mean if read == "mean" else _kf_read_output, name=f"kalman_{form}")
-
-
-# extended and unscented ----------------------------------------------------------------------
-
-def _ekf_pred(model, state, u, dt):
-    return ekf_predict(state, lambda x: model.f(x, u), model.Q)
-
-
-def _ekf_upd(model, state, y):
-    return ekf_update(state, y, model.h, model.R)[0]
-
-
-def _nl_read_output(params, state):
-    model = params[0] if isinstance(params, tuple) else params
-    return model.h(state.mean)
+    member = linear_member(model.F, model.Q, model.H, model.R, model.B, form=form)
+    return filter_estimator(member, model.m0, model.P0, read=read, name=f"kalman_{form}")
 
 
 def ekf_estimator(model: NonlinearSSM, *, read: str = "mean") -> Estimator:
     """An EKF as an :class:`Estimator` (``model.transition`` receives the held control as ``u``)."""
-    validate_nonlinear(model)
     _check_read(read)
-    return Estimator(model, _init, _ekf_pred, _ekf_upd,
-                     _read_mean if read == "mean" else _nl_read_output, name="ekf")
-
-
-def _ukf_pred(params, state, u, dt):
-    model, scheme = params
-    return ukf_predict(state, lambda x: model.f(x, u), model.Q, scheme)
-
-
-def _ukf_upd(params, state, y):
-    model, scheme = params
-    return ukf_update(state, y, model.h, model.R, scheme)[0]
+    return filter_estimator(ekf_member(model), model.m0, model.P0, read=read, name="ekf")
 
 
 def ukf_estimator(
@@ -111,12 +113,8 @@ def ukf_estimator(
 ) -> Estimator:
     """A UKF (Merwe scaled sigma points; admissible ranges in
     :class:`~jaxsim.estimation.ukf.MerweScaledSigmaPoints`) as an :class:`Estimator`."""
-    validate_nonlinear(model)
     _check_read(read)
-    scheme = MerweScaledSigmaPoints(alpha, beta, kappa)
-    check_merwe(scheme, model.n_states)
-    return Estimator((model, scheme), _init, _ukf_pred, _ukf_upd,
-                     _read_mean if read == "mean" else _nl_read_output, name="ukf")
+    return filter_estimator(ukf_member(model, alpha, beta, kappa), model.m0, model.P0, read=read, name="ukf")
 
 
 # Luenberger observer (current form) ---------------------------------------------------------

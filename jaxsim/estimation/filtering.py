@@ -1,9 +1,19 @@
-"""The one scanned predict/update loop shared by the Kalman, extended and sigma-point filters.
+"""The one filter interface and the one scanned predict/update loop of the Gaussian filters.
 
-A filter supplies ``update(state, y_t, mask_t, params_t) -> (state, Innovation)`` and
-``predict(state, u_t, params_t) -> state``; :func:`scan_filter` runs update-then-predict over the
-measurements in one ``lax.scan`` (the initial belief is the prior of the first step), applies the
-optional χ² gate and collects a :class:`~jaxsim.estimation.types.FilterResult`.
+:class:`FilterMember` is a Gaussian filter as a pair of pure step functions with its parameters —
+``predict(params, state, u)`` and ``update(params, state, y, mask)`` on a
+:class:`~jaxsim.estimation.types.GaussianState`.  The Kalman filter
+(:func:`~jaxsim.estimation.lgssm.linear_member`), the EKF (:func:`~jaxsim.estimation.ekf.ekf_member`)
+and the sigma-point filters (:func:`~jaxsim.estimation.ukf.sigma_point_member`,
+:func:`~jaxsim.estimation.ukf.ukf_member`) each build one, and every user of a filter takes one:
+the scanned EKF/UKF (:func:`scan_member`), the IMM bank (:mod:`~jaxsim.estimation.imm`) and the
+closed-loop :class:`~jaxsim.core.system.Estimator` (:func:`~jaxsim.estimation.adapters.filter_estimator`).
+
+:func:`scan_filter` runs update-then-predict over the measurements in one ``lax.scan`` (the initial
+belief is the prior of the first step), applies the optional χ² gate and collects a
+:class:`~jaxsim.estimation.types.FilterResult`; it takes bare ``update(state, y_t, mask_t, params_t)``
+and ``predict(state, u_t, params_t)`` so that the time-varying linear filter can slice its matrices
+per step.
 
 Every public filter with a ``gate`` argument checks it with :func:`check_gate` before tracing.
 """
@@ -15,11 +25,37 @@ from typing import Any, Callable
 import jax
 import jax.numpy as jnp
 
+from jaxsim.core.pytree import pytree_dataclass, static_field
 from jaxsim.core.validation import check_positive_scalar
-from jaxsim.estimation.types import FilterResult, Innovation, SqrtGaussianState
+from jaxsim.estimation.types import FilterResult, GaussianState, Innovation, SqrtGaussianState
 
 UpdateFn = Callable[[Any, jax.Array, jax.Array, Any], tuple[Any, Innovation]]
 PredictFn = Callable[[Any, Any, Any], Any]
+
+
+@pytree_dataclass
+class FilterMember:
+    """A Gaussian filter: its parameters (a pytree — tunable, vmappable) and pure step functions.
+
+    * ``predict(params, state, u) -> state``: the time update with the input ``u`` (``None`` when
+      the filter runs without inputs);
+    * ``update(params, state, y, mask) -> (state, Innovation)``: the measurement update with
+      ``y (p,)`` and the availability ``mask (p,)`` (masked components are ignored and may be NaN);
+    * ``observe(params, x) -> ŷ (p,)``: the noise-free measurement of a state (``None``: not given;
+      the closed-loop adapter's ``read="output"`` needs it);
+    * ``n_outputs``: the measurement dimension ``p`` it expects (``None``: unknown, not checked).
+
+    ``state`` is a :class:`~jaxsim.estimation.types.GaussianState`.  Build one with
+    :func:`~jaxsim.estimation.lgssm.linear_member`, :func:`~jaxsim.estimation.ekf.ekf_member`,
+    :func:`~jaxsim.estimation.ukf.sigma_point_member` / :func:`~jaxsim.estimation.ukf.ukf_member`
+    (or by hand with any functions of these signatures).
+    """
+
+    params: Any
+    predict: Callable[[Any, GaussianState, Any], GaussianState] = static_field()
+    update: Callable[[Any, GaussianState, jax.Array, jax.Array], tuple[GaussianState, Innovation]] = static_field()
+    n_outputs: int | None = static_field(default=None)
+    observe: Callable[[Any, jax.Array], jax.Array] | None = static_field(default=None)
 
 
 def _cov(state: Any) -> jax.Array:
@@ -76,3 +112,23 @@ def scan_filter(
         dof=innov.dof,
         accepted=accepted,
     )
+
+
+def scan_member(
+    member: FilterMember,
+    init: GaussianState,
+    y: jax.Array,
+    mask: jax.Array,
+    u: jax.Array | None = None,
+    gate: float | None = None,
+) -> FilterResult:
+    """:func:`scan_filter` with the steps of ``member`` (prior ``init`` of the first step; ``y (T, p)``,
+    ``mask (T, p)``, ``u (T, m)`` or ``None``; optional χ² ``gate``)."""
+
+    def update(state, y_t, m_t, _):
+        return member.update(member.params, state, y_t, m_t)
+
+    def predict(state, u_t, _):
+        return member.predict(member.params, state, u_t)
+
+    return scan_filter(init, predict, update, y, mask, u, None, gate)

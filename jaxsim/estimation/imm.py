@@ -10,96 +10,32 @@
 * :func:`imm_estimate` — the moment-matched mixture.
 
 Members may have different functions (constant-velocity and coordinated-turn models, say); they
-are unrolled over the (static) number of members, each a :class:`FilterMember`.
+are unrolled over the (static) number of members, each a
+:class:`~jaxsim.estimation.filtering.FilterMember` — the filter interface shared with the scanned
+filters and the closed-loop adapter (:func:`linear_member`, :func:`ekf_member`, :func:`ukf_member`
+are re-exported here).
 """
 
 from __future__ import annotations
 
-from typing import Any, Callable, NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxsim.core.pytree import pytree_dataclass, static_field
-from jaxsim.core.validation import check_covariance, check_finite, check_probabilities, check_shape, check_square
+from jaxsim.core.pytree import pytree_dataclass
+from jaxsim.core.validation import check_covariance, check_finite, check_probabilities
 from jaxsim.estimation import kalman
-from jaxsim.estimation.ekf import ekf_predict, ekf_update
-from jaxsim.estimation.lgssm import prepare_measurements
-from jaxsim.estimation.nonlinear import NonlinearSSM, validate_nonlinear
-from jaxsim.estimation.types import GaussianState, Innovation
-from jaxsim.estimation.ukf import MerweScaledSigmaPoints, check_merwe, ukf_predict, ukf_update
+from jaxsim.estimation.ekf import ekf_member
+from jaxsim.estimation.filtering import FilterMember
+from jaxsim.estimation.lgssm import linear_member, prepare_measurements
+from jaxsim.estimation.types import GaussianState
+from jaxsim.estimation.ukf import ukf_member
 from jaxsim.precision import to_common_float
 
-
-@pytree_dataclass
-class FilterMember:
-    """One model of a bank: ``predict(params, state, u) -> state`` and
-    ``update(params, state, y, mask) -> (state, Innovation)`` with its parameters; ``n_outputs`` the
-    measurement dimension ``p`` it expects (``None``: unknown, not checked)."""
-
-    params: Any
-    predict: Callable[[Any, GaussianState, Any], GaussianState] = static_field()
-    update: Callable[[Any, GaussianState, jax.Array, jax.Array], tuple[GaussianState, Innovation]] = static_field()
-    n_outputs: int | None = static_field(default=None)
-
-
-def _linear_predict(p, state, u):
-    return kalman.predict(state, p["F"], p["Q"], p.get("B"), u)
-
-
-def _linear_update(p, state, y, mask):
-    return kalman.update(state, y, p["H"], p["R"], mask=mask)
-
-
-def linear_member(F: Any, Q: Any, H: Any, R: Any, B: Any = None) -> FilterMember:
-    """A Kalman-filter member with matrices ``F (n, n)``, ``Q``, ``H (p, n)``, ``R``, ``B (n, m)``
-    (shapes, finiteness and PSD of ``Q, R`` checked on concrete values)."""
-    params = {"F": jnp.asarray(F), "Q": jnp.asarray(Q), "H": jnp.asarray(H), "R": jnp.asarray(R)}
-    check_square("F", params["F"])
-    n = params["F"].shape[0]
-    check_finite("F", params["F"])
-    check_covariance("Q", params["Q"], n)
-    check_shape("H", params["H"], (None, n))
-    check_finite("H", params["H"])
-    check_covariance("R", params["R"], params["H"].shape[0])
-    if B is not None:
-        params["B"] = jnp.asarray(B)
-        check_shape("B", params["B"], (n, None))
-        check_finite("B", params["B"])
-    return FilterMember(params, _linear_predict, _linear_update, params["H"].shape[0])
-
-
-def _ekf_predict(model, state, u):
-    return ekf_predict(state, lambda x: model.f(x, u), model.Q)
-
-
-def _ekf_update(model, state, y, mask):
-    return ekf_update(state, y, model.h, model.R, mask=mask)
-
-
-def ekf_member(model: NonlinearSSM) -> FilterMember:
-    """An EKF member from a :class:`~jaxsim.estimation.nonlinear.NonlinearSSM` (its ``m0, P0`` unused)."""
-    validate_nonlinear(model)
-    return FilterMember(model, _ekf_predict, _ekf_update, model.n_outputs)
-
-
-def _ukf_predict(p, state, u):
-    model, scheme = p
-    return ukf_predict(state, lambda x: model.f(x, u), model.Q, scheme)
-
-
-def _ukf_update(p, state, y, mask):
-    model, scheme = p
-    return ukf_update(state, y, model.h, model.R, scheme, mask=mask)
-
-
-def ukf_member(model: NonlinearSSM, alpha: float = 1.0, beta: float = 2.0, kappa: float = 0.0) -> FilterMember:
-    """A UKF member (Merwe scaled sigma points; admissible ranges in :class:`MerweScaledSigmaPoints`)."""
-    validate_nonlinear(model)
-    scheme = MerweScaledSigmaPoints(alpha, beta, kappa)
-    check_merwe(scheme, model.n_states)
-    return FilterMember((model, scheme), _ukf_predict, _ukf_update, model.n_outputs)
+__all__ = ["IMM", "FilterMember", "IMMResult", "IMMState", "ekf_member", "imm", "imm_estimate", "imm_filter",
+           "imm_init", "imm_predict", "imm_update", "linear_member", "ukf_member"]
 
 
 @pytree_dataclass

@@ -9,12 +9,13 @@ Model ``dx = (A x + B u) dt + G dw``, ``E[dw dwᵀ] = Q_c dt``.
 * Kalman–Bucy (continuous measurement ``dz = C x dt + dv``, ``E[dv dvᵀ] = R_c dt``):
   ``ṁ = A m + B u + K (y − C m)``, ``K = P Cᵀ R_c⁻¹``, ``Ṗ = A P + P Aᵀ + G Q_c Gᵀ − P Cᵀ R_c⁻¹ C P``
   (:func:`kalman_bucy_derivative`, :func:`kalman_bucy_step`);
-  its stationary covariance solves the filter CARE, :func:`steady_state_kalman_bucy` (through
-  :mod:`jaxsim.control.kalman_gain`).
+  its stationary covariance solves the filter CARE: :func:`jaxsim.control.kalman_gain.kalman_bucy`
+  (:func:`steady_state_kalman_bucy` is its deprecated alias).
 """
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import jax
@@ -22,7 +23,6 @@ import jax.numpy as jnp
 
 from jaxsim.control.kalman_gain import kalman_bucy
 from jaxsim.core.integrators import RK4, Solver
-from jaxsim.core.validation import check_covariance, check_square
 from jaxsim.estimation.kalman import symmetrize
 from jaxsim.estimation.types import GaussianState
 
@@ -94,17 +94,11 @@ def kalman_bucy_step(
 def steady_state_kalman_bucy(
     A: Any, C: Any, Qc: Any, Rc: Any, *, G: Any = None
 ) -> tuple[jax.Array, jax.Array]:
-    """Stationary ``(P (n, n), K (n, p))`` of the Kalman–Bucy filter:
-    ``A P + P Aᵀ + G Q_c Gᵀ − P Cᵀ R_c⁻¹ C P = 0``, ``K = P Cᵀ R_c⁻¹``.
-
-    Solved by :func:`jaxsim.control.kalman_gain.kalman_bucy` (the toolkit's CARE solver, implicit
-    derivatives); requires ``(A, C)`` detectable and ``(A, G Q_c^{1/2})`` stabilisable.
-    """
-    A, C = jnp.asarray(A), jnp.asarray(C)
-    check_square("A", A)
-    if C.ndim != 2 or C.shape[1] != A.shape[0]:
-        raise ValueError(f"C: expected shape (p, {A.shape[0]}), got {tuple(C.shape)}")
-    check_covariance("Qc", Qc)
-    check_covariance("Rc", Rc, C.shape[0])
+    """Deprecated alias of :func:`jaxsim.control.kalman_gain.kalman_bucy` ``(A, C, Qc, Rc, G)`` — the
+    toolkit's one steady-state Kalman–Bucy API — returning ``(P (n, n), K (n, p))`` in this order
+    (``kalman_bucy`` returns the named ``KalmanBucyGain(l, p)``).  Checks and errors are
+    ``kalman_bucy``'s, naming ``A, C, Qc, Rc``."""
+    warnings.warn("steady_state_kalman_bucy is deprecated; use jaxsim.control.kalman_gain.kalman_bucy(A, C, W, V, G) "
+                  "(it returns KalmanBucyGain(l, p))", DeprecationWarning, stacklevel=2)
     gain = kalman_bucy(A, C, Qc, Rc, G, names=("A", "C", "Qc", "Rc"))
     return gain.p, gain.l

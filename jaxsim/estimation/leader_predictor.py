@@ -38,8 +38,9 @@ Prediction modes (static ``mode``): ``"kalman"`` (the paper: fit + filter predic
 ``"hold"`` (no prediction between frames: the last frame's fit is held).
 
 Measurement ``y`` each tick: ``[x_F (12), z_FR (3), frame]`` from
-:func:`jaxsim.plants.formation.camera_sensor`.  What the controller reads:
-``[t, x_F (12), X̂ (3), V̂ (3), Â (3)]`` (22,), target estimates in the odometry frame.
+:func:`jaxsim.plants.formation.camera_sensor`.  What the controller reads: a :class:`LeaderEstimate`
+(the follower's own state and ``X̂, V̂, Â`` of the target point in the odometry frame); the tick
+time reaches the controller from the rollout (``Controller.step``'s ``t``).
 """
 
 from __future__ import annotations
@@ -50,15 +51,35 @@ import jax
 import jax.numpy as jnp
 
 from jaxsim.core.pytree import pytree_dataclass, static_field
+from jaxsim.core.rotations import rotation_z
 from jaxsim.core.system import Estimator
 from jaxsim.core.validation import check_finite, check_positive, check_shape
 from jaxsim.estimation import kalman
 from jaxsim.estimation.alpha_beta import poly_window_weights
 from jaxsim.estimation.types import GaussianState
-from jaxsim.plants.marine import rotation_z
 
 MODES = ("kalman", "polynomial", "hold")
-READ_SIZE = 22
+
+
+class LeaderEstimate(NamedTuple):
+    """What :func:`leader_predictor` gives the follower's controller each tick (absolute frame,
+    which is the follower's odometry frame).
+
+    follower ``(12,)``: the follower's own state ``[η, ν]`` from its inertial navigation (taken as
+    exact); position ``(3,)`` (m), velocity ``(3,)`` (m/s), acceleration ``(3,)`` (m/s²): the
+    estimate of the target point ``X*`` now.  Fields gain a leading time axis in a recorded
+    trajectory (``Trajectory.x_hat``).
+    """
+
+    follower: jax.Array
+    position: jax.Array
+    velocity: jax.Array
+    acceleration: jax.Array
+
+    @property
+    def target(self) -> jax.Array:
+        """``(..., 3, 3)``: rows position, velocity, acceleration (the controller's ``[X, V, A]``)."""
+        return jnp.stack([self.position, self.velocity, self.acceleration], axis=-2)
 
 
 @pytree_dataclass
@@ -163,8 +184,9 @@ def target_estimate(params: PredictorParams, s: PredictorState) -> jax.Array:
     return s.fit
 
 
-def _read(params: PredictorParams, s: PredictorState) -> jax.Array:
-    return jnp.concatenate([s.t[None], s.ins, target_estimate(params, s).reshape(-1)])
+def _read(params: PredictorParams, s: PredictorState) -> LeaderEstimate:
+    position, velocity, acceleration = target_estimate(params, s)
+    return LeaderEstimate(s.ins, position, velocity, acceleration)
 
 
 def leader_predictor(

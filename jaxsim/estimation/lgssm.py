@@ -30,10 +30,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxsim.core.pytree import pytree_dataclass
-from jaxsim.core.validation import check_covariance, check_finite, is_concrete
+from jaxsim.core.validation import check_covariance, check_finite, check_shape, check_square, is_concrete
 from jaxsim.estimation import kalman
-from jaxsim.estimation.filtering import check_gate, scan_filter
-from jaxsim.estimation.types import FilterResult, GaussianState, SqrtGaussianState
+from jaxsim.estimation.filtering import FilterMember, check_gate, scan_filter
+from jaxsim.estimation.types import FilterResult, GaussianState, Innovation, SqrtGaussianState
 from jaxsim.precision import to_common_float
 
 FORMS = ("joseph", "standard", "sqrt")
@@ -240,6 +240,48 @@ def _scan_filter(model, y, m, u, form, gate) -> FilterResult:
     if form == "sqrt":
         init = SqrtGaussianState(model.m0, cholesky_psd(model.P0))
     return scan_filter(init, predict, update, y, m, u, step_params(model), gate)
+
+
+def _linear_predict(p: dict, state: GaussianState, u: Any) -> GaussianState:
+    return kalman.predict(state, p["F"], p["Q"], p.get("B"), u)
+
+
+def _linear_update_joseph(p: dict, state: GaussianState, y: jax.Array, mask: Any) -> tuple[GaussianState, Innovation]:
+    return kalman.update(state, y, p["H"], p["R"], mask=mask, form="joseph")
+
+
+def _linear_update_standard(p: dict, state: GaussianState, y: jax.Array, mask: Any) -> tuple[GaussianState, Innovation]:
+    return kalman.update(state, y, p["H"], p["R"], mask=mask, form="standard")
+
+
+def _linear_observe(p: dict, x: jax.Array) -> jax.Array:
+    return p["H"] @ x
+
+
+# module-level functions, not partials: static fields must compare equal across rebuilt members
+_LINEAR_UPDATES = {"joseph": _linear_update_joseph, "standard": _linear_update_standard}
+
+
+def linear_member(F: Any, Q: Any, H: Any, R: Any, B: Any = None, *, form: str = "joseph") -> FilterMember:
+    """The time-invariant Kalman filter ``F (n, n)``, ``Q``, ``H (p, n)``, ``R``, ``B (n, m)`` as a
+    :class:`~jaxsim.estimation.filtering.FilterMember` (``params`` a dict of the matrices; ``form``
+    ``"joseph"``/``"standard"`` of the covariance update).  Shapes, finiteness and PSD of ``Q, R``
+    checked on concrete values."""
+    params = {"F": jnp.asarray(F), "Q": jnp.asarray(Q), "H": jnp.asarray(H), "R": jnp.asarray(R)}
+    check_square("F", params["F"])
+    n = params["F"].shape[0]
+    check_finite("F", params["F"])
+    check_covariance("Q", params["Q"], n)
+    check_shape("H", params["H"], (None, n))
+    check_finite("H", params["H"])
+    check_covariance("R", params["R"], params["H"].shape[0])
+    if B is not None:
+        params["B"] = jnp.asarray(B)
+        check_shape("B", params["B"], (n, None))
+        check_finite("B", params["B"])
+    if form not in kalman.UPDATE_FORMS:
+        raise ValueError(f"form: expected one of {kalman.UPDATE_FORMS}, got {form!r}")
+    return FilterMember(params, _linear_predict, _LINEAR_UPDATES[form], params["H"].shape[0], _linear_observe)
 
 
 def sample(model: LinearGaussianSSM, key: jax.Array, n_steps: int, u: Any = None) -> tuple[jax.Array, jax.Array]:

@@ -50,7 +50,7 @@ theorem condition ``λmin(W) ≥ 2‖P‖N2``), and the surface exists (``|v_eq|
 
 from __future__ import annotations
 
-from typing import Any, Callable, NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -58,32 +58,11 @@ import numpy as np
 
 from jaxsim.core.integrators import SemiImplicitEuler, Solver
 from jaxsim.core.pytree import pytree_dataclass, static_field
+from jaxsim.core.reduced_model import KnownTerms, ReducedModel, SlidingBounds  # noqa: F401  (re-exported)
 from jaxsim.core.switching import SWITCHES, get_switch
 from jaxsim.core.validation import check_finite, check_positive, check_shape, check_square, is_concrete
 
-KnownTerms = Callable[[Any, jax.Array, jax.Array, jax.Array, jax.Array], tuple[jax.Array, jax.Array]]
 SCHEMES = ("implicit_sign", "smooth")
-
-
-@pytree_dataclass
-class ReducedModel:
-    """Transformed reduced model (2.2); block shapes for ``k − 1 = m``:
-    ``F1`` (), ``F2`` (m,), ``F3`` (m,), ``F4`` (m, m), ``D1`` (), ``D2`` (m,).
-
-    ``known(params, t, y, u, z2) -> (r1 (), r2 (m,))`` gives the known terms at time ``t`` for the
-    measured output ``y``, held input ``u`` and the (estimated) ``z2``;
-    ``reduced_output(params, y) -> y*`` (scalar).
-    """
-
-    F1: Any
-    F2: Any
-    F3: Any
-    F4: Any
-    D1: Any
-    D2: Any
-    params: Any
-    known: KnownTerms = static_field()
-    reduced_output: Callable[[Any, jax.Array], jax.Array] = static_field()
 
 
 @pytree_dataclass
@@ -93,17 +72,6 @@ class SMOGains:
     k1: Any = 1e7
     k2: Any = 1.0
     k3: Any = 1e4
-
-
-@pytree_dataclass
-class SlidingBounds:
-    """Bounds (3.3) on the nonlinear mismatch and ``|d| ≤ beta`` on the fault."""
-
-    N1: Any = 0.0
-    M1: Any = 0.0
-    N2: Any = 0.0
-    M2: Any = 0.0
-    beta: Any = 0.0
 
 
 @pytree_dataclass

@@ -1,20 +1,20 @@
-"""Steady-state (stationary) Kalman filter of a time-invariant model.
+"""Deprecated: the stationary Kalman filter is :func:`jaxsim.control.kalman_gain.discrete_kalman`.
 
-The prediction covariance solves the filter DARE
-``P = F P Fᵀ − F P Hᵀ (H P Hᵀ + R)⁻¹ H P Fᵀ + Q`` — solved by the toolkit's DARE
-(:func:`jaxsim.control.kalman_gain.discrete_kalman`: doubling + Hewer polish, implicit derivatives).
-Requires ``(F, H)`` detectable and ``(F, Q^{1/2})`` without uncontrollable modes on the unit circle.
+The toolkit has one steady-state Kalman API, in python-control's argument order ``(A, C, Q, R)``
+(``control.dlqe(A, G, C, QN, RN)`` ≙ ``discrete_kalman(A, C, QN, RN, G)``, predictor gain
+``L = A K``) and :func:`jaxsim.control.kalman_gain.kalman_bucy` for continuous time.
+:func:`steady_state_kalman` ``(F, Q, H, R)`` — the old order — stays one release as a thin alias.
 """
 
 from __future__ import annotations
 
+import warnings
 from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
 
 from jaxsim.control.kalman_gain import discrete_kalman
-from jaxsim.core.validation import check_covariance, check_finite, check_square
 from jaxsim.estimation.kalman import symmetrize
 
 
@@ -29,16 +29,13 @@ class SteadyStateKalman(NamedTuple):
 
 
 def steady_state_kalman(F: Any, Q: Any, H: Any, R: Any) -> SteadyStateKalman:
-    """Stationary covariances and gain of the filter for ``(F (n, n), Q (n, n), H (p, n), R (p, p))``."""
-    F, Q, H, R = (jnp.asarray(v) for v in (F, Q, H, R))
-    check_square("F", F)
-    n = F.shape[0]
-    if H.ndim != 2 or H.shape[1] != n:
-        raise ValueError(f"H: expected shape (p, {n}), got {tuple(H.shape)}")
-    check_finite("F", F)
-    check_finite("H", H)
-    check_covariance("Q", Q, n)
-    check_covariance("R", R, H.shape[0])
+    """Deprecated alias: ``discrete_kalman(F, H, Q, R)`` (note the order) repackaged with the
+    innovation covariance ``S = H P⁻ Hᵀ + R``.  Checks and errors are ``discrete_kalman``'s, naming
+    ``F, H, Q, R``."""
+    warnings.warn("steady_state_kalman(F, Q, H, R) is deprecated; use "
+                  "jaxsim.control.kalman_gain.discrete_kalman(A, C, Q, R) (python-control's order)",
+                  DeprecationWarning, stacklevel=2)
     gain = discrete_kalman(F, H, Q, R, names=("F", "H", "Q", "R"))
-    s = symmetrize(H @ gain.p_prior @ H.T + R)
+    h, r = (jnp.atleast_2d(jnp.asarray(m, gain.p_prior.dtype)) for m in (H, R))
+    s = symmetrize(h @ gain.p_prior @ h.T + r)
     return SteadyStateKalman(gain.p_prior, gain.p_post, gain.k, s)

@@ -5,6 +5,10 @@ Points ``m``, ``m ± √(n+λ) Lᵢ`` (``Lᵢ`` the columns of ``chol(P)``), ``�
 ``MerweScaledSigmaPoints``.  Any object with ``points(mean, cov)`` and ``weights(n)`` works as a
 scheme (see :mod:`jaxsim.estimation.cubature`).
 
+:func:`sigma_point_member` binds a model and a scheme to the steps as a
+:class:`~jaxsim.estimation.filtering.FilterMember` (:func:`ukf_member` with Merwe points), used by
+the scanned :func:`sigma_point_filter`, the IMM and the closed-loop adapter alike.
+
 The update redraws sigma points from the predicted ``(m⁻, P⁻)`` (FilterPy's ``update`` instead reuses
 the points propagated by ``predict``; the two agree when ``Q = 0`` or after a redraw).
 """
@@ -21,7 +25,7 @@ import numpy as np
 from jaxsim.core.pytree import pytree_dataclass
 from jaxsim.core.validation import check_finite, check_positive, is_concrete
 from jaxsim.estimation import kalman
-from jaxsim.estimation.filtering import check_gate, scan_filter
+from jaxsim.estimation.filtering import FilterMember, check_gate, scan_member
 from jaxsim.estimation.lgssm import prepare_measurements
 from jaxsim.estimation.nonlinear import NonlinearSSM, common_float_nonlinear, validate_nonlinear
 from jaxsim.estimation.types import FilterResult, GaussianState, Innovation
@@ -130,6 +134,38 @@ def ukf_update(
     return kalman.condition_moments(state, y - y_hat, s + R, cross, mask=m)
 
 
+def _predict(params: tuple, state: GaussianState, u: Any) -> GaussianState:
+    model, scheme = params
+    return ukf_predict(state, lambda x: model.f(x, u), model.Q, scheme)
+
+
+def _update(params: tuple, state: GaussianState, y: jax.Array, mask: jax.Array) -> tuple[GaussianState, Innovation]:
+    model, scheme = params
+    return ukf_update(state, y, model.h, model.R, scheme, mask=mask)
+
+
+def _observe(params: tuple, x: jax.Array) -> jax.Array:
+    return params[0].h(x)
+
+
+def _member(model: NonlinearSSM, scheme: SigmaPointScheme) -> FilterMember:
+    return FilterMember((model, scheme), _predict, _update, model.n_outputs, _observe)
+
+
+def sigma_point_member(model: NonlinearSSM, scheme: SigmaPointScheme) -> FilterMember:
+    """The sigma-point filter of ``model`` with ``scheme`` (any object with ``points``/``weights``)
+    as a :class:`~jaxsim.estimation.filtering.FilterMember`; ``params = (model, scheme)``
+    (``model.m0, P0`` unused).  ``ValueError`` for a bad model or bad Merwe parameters."""
+    validate_nonlinear(model)
+    check_merwe(scheme, model.n_states)
+    return _member(model, scheme)
+
+
+def ukf_member(model: NonlinearSSM, alpha: float = 1.0, beta: float = 2.0, kappa: float = 0.0) -> FilterMember:
+    """A UKF member (Merwe scaled sigma points; admissible ranges in :class:`MerweScaledSigmaPoints`)."""
+    return sigma_point_member(model, MerweScaledSigmaPoints(alpha, beta, kappa))
+
+
 def sigma_point_filter(
     model: NonlinearSSM,
     y: Any,
@@ -152,13 +188,7 @@ def sigma_point_filter(
 
 @functools.partial(jax.jit, static_argnames=("gate",))
 def _sigma_scan(model: NonlinearSSM, scheme: SigmaPointScheme, y, m, u, gate: float | None) -> FilterResult:
-    def update(state, y_t, m_t, _):
-        return ukf_update(state, y_t, model.h, model.R, scheme, mask=m_t)
-
-    def predict(state, u_t, _):
-        return ukf_predict(state, lambda x: model.f(x, u_t), model.Q, scheme)
-
-    return scan_filter(GaussianState(model.m0, model.P0), predict, update, y, m, u, None, gate)
+    return scan_member(_member(model, scheme), GaussianState(model.m0, model.P0), y, m, u, gate)
 
 
 def unscented_kalman_filter(

@@ -32,6 +32,7 @@ import numpy as np
 from jax.sharding import Mesh, PartitionSpec as P
 
 from jaxsim.core.progress import progress_bar
+from jaxsim.core.validation import check_int
 from jaxsim.montecarlo.designs import Design, single_point
 from jaxsim.montecarlo.distributions import describe_space, is_distribution, validate_space
 from jaxsim.montecarlo.jaxpr_hash import jaxpr_hash
@@ -73,16 +74,6 @@ class SweepResult:
 # argument checks
 
 
-def _check_int(name: str, value: Any, low: int, high: int | None = None) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise ValueError(f"{name}: must be an integer, got {value!r}")
-    v = int(value)
-    if v < low or (high is not None and v > high):
-        rng = f"≥ {low}" if high is None else f"in [{low}, {high}]"
-        raise ValueError(f"{name}: must be {rng}, got {v}")
-    return v
-
-
 def as_key(key: Any) -> jax.Array:
     """A typed PRNG key from an int seed, a typed key or a raw ``uint32[2]`` key."""
     if isinstance(key, (int, np.integer)) and not isinstance(key, bool):
@@ -104,7 +95,7 @@ def resolve_devices(devices: Any) -> list:
     if devices is None:
         return list(every)
     if isinstance(devices, (int, np.integer)) and not isinstance(devices, bool):
-        k = _check_int("devices", devices, 1, len(every))
+        k = check_int("devices", devices, 1, len(every))
         if jax.process_count() > 1 and k != len(every):
             raise ValueError(f"devices: a multi-process run uses all {len(every)} global devices, got {k}")
         return list(every[:k])
@@ -385,9 +376,9 @@ def sweep(
             default silent.
     """
     fn, space, name = _from_problem(fn, space, name)
-    n = _check_int("n", n, 1, 2**32 - 1)
-    block_size = _check_int("block_size", block_size, 1)
-    keep_runs = _check_int("keep_runs", keep_runs, 0, min(n, MAX_KEEP_RUNS))
+    n = check_int("n", n, 1, 2**32 - 1)
+    block_size = check_int("block_size", block_size, 1)
+    keep_runs = check_int("keep_runs", keep_runs, 0, min(n, MAX_KEEP_RUNS))
     if sketch is not None and not isinstance(sketch, QuantileSketch):
         raise ValueError(f"sketch: expected a QuantileSketch or None, got {sketch!r}")
     validate_space(space)
@@ -469,7 +460,7 @@ def _resolve_chunk_size(chunk_size: int | None, out: str | Path | None, fingerpr
     if chunk_size is None:  # the folder's layout if it holds this sweep, else min(100k, n)
         chunk_size = _stored_chunk_size(out, fingerprint) or min(DEFAULT_CHUNK, n)
         chunk_size = math.ceil(chunk_size / block_size) * block_size
-    chunk_size = _check_int("chunk_size", chunk_size, 1)
+    chunk_size = check_int("chunk_size", chunk_size, 1)
     if chunk_size % block_size:
         raise ValueError(f"chunk_size: must be a multiple of block_size={block_size}, got {chunk_size}")
     return chunk_size

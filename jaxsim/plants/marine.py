@@ -6,7 +6,7 @@ Conventions (Fossen, *Handbook of Marine Craft Hydrodynamics and Motion Control*
 * generalised position ``η = [x, y, z, φ, θ, ψ]`` (m, rad), body velocity
   ``ν = [u, v, w, p, q, r]`` (m/s, rad/s), generalised force ``τ = [X, Y, Z, K, M, N]`` (N, N·m);
 * attitude by zyx Euler angles: ``R(Θ) = R_z(ψ) R_y(θ) R_x(φ)`` maps body vectors to the absolute
-  frame, ``ṗ = R ν₁``, ``Θ̇ = T(Θ) ν₂`` (singular at ``θ = ±90°``); ``η̇ = J(η) ν``;
+  frame (the rotations live in :mod:`jaxsim.core.rotations`, re-exported here), ``ṗ = R ν₁``, ``Θ̇ = T(Θ) ν₂`` (singular at ``θ = ±90°``); ``η̇ = J(η) ν``;
 * dynamics ``M ν̇ + C(ν) ν + D(ν) ν + g(η) = τ`` with ``M = M_RB + M_A`` symmetric positive
   definite, ``C`` from ``M`` by Kirchhoff's equations (:func:`coriolis_from_mass`), ``D`` diagonal
   linear + quadratic damping and ``g`` the restoring forces of weight and buoyancy.
@@ -24,48 +24,15 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
+from jaxsim.core.rotations import (  # noqa: F401  (re-exported: marine.rotation_z, marine.skew, ...)
+    euler_from_rotation,
+    rotation_x,
+    rotation_y,
+    rotation_z,
+    rotation_zyx,
+    skew,
+)
 from jaxsim.core.validation import check_covariance
-
-
-def skew(v: jax.Array) -> jax.Array:
-    """Cross-product matrix ``S(v)`` with ``S(v) w = v × w``; ``v`` shape ``(3,)``."""
-    x, y, z = v[0], v[1], v[2]
-    zero = jnp.zeros_like(x)
-    return jnp.stack([jnp.stack([zero, -z, y]), jnp.stack([z, zero, -x]), jnp.stack([-y, x, zero])])
-
-
-def rotation_x(phi: jax.Array) -> jax.Array:
-    """Elementary rotation about x by ``phi`` (rad), ``(3, 3)``."""
-    c, s = jnp.cos(phi), jnp.sin(phi)
-    one, zero = jnp.ones_like(c), jnp.zeros_like(c)
-    return jnp.stack([jnp.stack([one, zero, zero]), jnp.stack([zero, c, -s]), jnp.stack([zero, s, c])])
-
-
-def rotation_y(theta: jax.Array) -> jax.Array:
-    """Elementary rotation about y by ``theta`` (rad), ``(3, 3)``."""
-    c, s = jnp.cos(theta), jnp.sin(theta)
-    one, zero = jnp.ones_like(c), jnp.zeros_like(c)
-    return jnp.stack([jnp.stack([c, zero, s]), jnp.stack([zero, one, zero]), jnp.stack([-s, zero, c])])
-
-
-def rotation_z(psi: jax.Array) -> jax.Array:
-    """Elementary rotation about z by ``psi`` (rad), ``(3, 3)``."""
-    c, s = jnp.cos(psi), jnp.sin(psi)
-    one, zero = jnp.ones_like(c), jnp.zeros_like(c)
-    return jnp.stack([jnp.stack([c, -s, zero]), jnp.stack([s, c, zero]), jnp.stack([zero, zero, one])])
-
-
-def rotation_zyx(euler: jax.Array) -> jax.Array:
-    """Body-to-absolute rotation ``R_z(ψ) R_y(θ) R_x(φ)`` for ``euler = [φ, θ, ψ]`` (rad)."""
-    return rotation_z(euler[2]) @ rotation_y(euler[1]) @ rotation_x(euler[0])
-
-
-def euler_from_rotation(rot: jax.Array) -> jax.Array:
-    """``[φ, θ, ψ]`` of a zyx rotation matrix (inverse of :func:`rotation_zyx` for ``|θ| < 90°``)."""
-    phi = jnp.arctan2(rot[2, 1], rot[2, 2])
-    theta = -jnp.arcsin(jnp.clip(rot[2, 0], -1.0, 1.0))
-    psi = jnp.arctan2(rot[1, 0], rot[0, 0])
-    return jnp.stack([phi, theta, psi])
 
 
 def course_attitude(velocity: jax.Array, min_speed: Any = 0.0) -> jax.Array:

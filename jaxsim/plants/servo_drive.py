@@ -41,6 +41,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxsim.core.pytree import pytree_dataclass
+from jaxsim.core.reduced_model import ReducedModel, SlidingBounds
 from jaxsim.core.system import Plant
 from jaxsim.core.validation import check_finite, check_positive
 
@@ -268,10 +269,9 @@ def _angle(op: ObserverModelParams, y: jax.Array) -> jax.Array:
     return y[0]
 
 
-def reduced_model(params: ObserverModelParams | None = None):
-    """The drive's reduced model as a :class:`~jaxsim.estimation.reduced_order_smo.ReducedModel`."""
-    from jaxsim.estimation.reduced_order_smo import ReducedModel
-
+def reduced_model(params: ObserverModelParams | None = None) -> ReducedModel:
+    """The drive's reduced model as a :class:`~jaxsim.core.reduced_model.ReducedModel` (the input of
+    :func:`jaxsim.estimation.reduced_order_smo.reduced_order_smo`)."""
     op = ObserverModelParams() if params is None else params
     validate(op.plant)
     Q = jnp.asarray(op.Q, float)
@@ -290,14 +290,12 @@ def fault_torque_from_estimate(p: ServoParams, t: jax.Array, d_hat: jax.Array) -
     return total_inertia(p, t) * d_hat
 
 
-def sliding_bounds(p: ServoParams, fault_bound: float):
+def sliding_bounds(p: ServoParams, fault_bound: float) -> SlidingBounds:
     """Bounds (3.3) for the drive: ``N1 = M1 = N2 = 0``, ``M2 = 2 M_dry/(i_r J_t,min)`` (the sign
     nonlinearity, the paper's ``M* = 2``), ``β = fault_bound/J_t,min`` for ``|M̃| ≤ fault_bound`` (N·m).
 
     ``J_t,min`` uses the smallest ``H*`` over all elbow angles, so the bounds hold for any motion.
     """
-    from jaxsim.estimation.reduced_order_smo import SlidingBounds
-
     check_positive("fault_bound", fault_bound, allow_zero=True)
     d = p.drive
     h_min = float(jnp.min(jax.vmap(lambda q3: _m22(p.arm, q3))(jnp.linspace(0.0, 2 * jnp.pi, 721))))

@@ -31,7 +31,8 @@ balance the main rotor's steady reaction ``M_R = kc τ1`` for pitch angles ``ψ 
 points must stay inside that envelope (:func:`hover_equilibrium` reports the residual).
 
 Friction ``sgn`` terms: exact by default; ``sign_smoothing = ε > 0`` replaces ``sgn v`` by
-``tanh(v/ε)`` (ε in rad/s) — the smooth surrogate used on gradient paths (DESIGN principle 5).
+``tanh(v/ε)`` (ε in rad/s; :func:`jaxsim.core.switching.smooth_sign`) — the smooth surrogate used
+on gradient paths (DESIGN principle 5).
 Units: SI (kg·m², N·m, s, rad, V).
 """
 
@@ -44,6 +45,7 @@ import jax.numpy as jnp
 
 from jaxsim.core.linearize import Equilibrium, Linearization, find_equilibrium, linearize
 from jaxsim.core.pytree import pytree_dataclass, replace
+from jaxsim.core.switching import smooth_sign
 from jaxsim.core.system import Plant, gaussian_sensor, Sensor
 from jaxsim.core.validation import check_finite, check_positive
 
@@ -86,12 +88,6 @@ SCIREP_2022 = TRMSParams(b2=0.9, Kgy=0.05, kc=2.0)
 PARAMETER_SETS = {"feedback_manufacturer": FEEDBACK_MANUFACTURER, "scirep_2022": SCIREP_2022}
 
 
-def _sgn(v: jax.Array, eps: jax.Array) -> jax.Array:
-    """``tanh(v/ε)`` for ``ε > 0``, exact ``sgn v`` for ``ε = 0`` (NaN-free gradients either way)."""
-    smooth = eps > 0
-    return jnp.where(smooth, jnp.tanh(v / jnp.where(smooth, eps, 1.0)), jnp.sign(v))
-
-
 def main_torque(p: TRMSParams, tau1: jax.Array) -> jax.Array:
     """``M1 = a1 τ1² + b1 τ1`` (N·m)."""
     return p.a1 * tau1**2 + p.b1 * tau1
@@ -127,8 +123,8 @@ def applied_moments(p: TRMSParams, x: jax.Array) -> jax.Array:
     psi, dpsi, dphi, tau1, tau2, m_r = x[0], x[2], x[3], x[4], x[5], x[6]
     m1 = main_torque(p, tau1)
     eps = p.sign_smoothing
-    pitch = m1 - p.B2psi * _sgn(dpsi, eps) - p.Kgy * m1 * dphi * jnp.cos(psi)
-    yaw = tail_torque(p, tau2) - p.B2phi * _sgn(dphi, eps) - m_r
+    pitch = m1 - p.B2psi * smooth_sign(dpsi, eps) - p.Kgy * m1 * dphi * jnp.cos(psi)
+    yaw = tail_torque(p, tau2) - p.B2phi * smooth_sign(dphi, eps) - m_r
     return jnp.stack([pitch, yaw])
 
 

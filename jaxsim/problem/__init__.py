@@ -1,7 +1,8 @@
 """The Problem layer: parameter spaces, reparametrisations and :class:`Problem` (a tuning or robustness
 question as one object).  Imports only :mod:`jaxsim.core`, plants/control/estimation (through the
 builders users pass) and :mod:`jaxsim.montecarlo.distributions`; ``optim``, ``jaxsim.montecarlo`` and
-``jaxsim.envs`` accept a :class:`Problem`.
+``jaxsim.envs`` accept a :class:`Problem`.  :mod:`~.trms` holds the TRMS tracking problem (the study and
+the ``jaxsim_trms`` env share it).
 """
 
 from jaxsim.core.costs import Breakdown, Objective, RunningCost, combine

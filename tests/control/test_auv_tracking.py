@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 
 from jaxsim.control.auv_tracking import auv_tracking, control_force
+from jaxsim.estimation.leader_predictor import LeaderEstimate
 from jaxsim.plants import auv, formation
 
 
-def _read(t, x, target):
-    return jnp.concatenate([jnp.array([t]), x, jnp.asarray(target).reshape(-1)])
+def _read(x, target):
+    return LeaderEstimate(x, *jnp.asarray(target))
 
 
 def test_on_track_force_is_cruise_damping():
@@ -36,9 +37,9 @@ def test_sliding_term_and_start_time():
     np.testing.assert_allclose(np.abs(tau - tau_n), 100.0, rtol=1e-9)
     smooth = auv_tracking(switch="tanh", width=1e-9)
     np.testing.assert_allclose(control_force(smooth.params, x, target), tau, rtol=1e-9)
-    _, u = sign.step(sign.params, sign.init(sign.params, None, None), None, _read(3.0, x, target), 1e-3)
+    _, u = sign.step(sign.params, sign.init(sign.params, None, None), None, _read(x, target), 1e-3, 3.0)
     assert np.all(np.asarray(u) == 0.0)
-    _, u = sign.step(sign.params, sign.init(sign.params, None, None), None, _read(4.0, x, target), 1e-3)
+    _, u = sign.step(sign.params, sign.init(sign.params, None, None), None, _read(x, target), 1e-3, 4.0)
     np.testing.assert_allclose(u, tau)
 
 

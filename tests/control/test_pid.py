@@ -48,7 +48,7 @@ def test_derivative_filter_matches_backward_euler_closed_form():
     state = ctrl.init(p, jnp.zeros(1), jnp.zeros(1))
     outs = []
     for k in range(1, 200):
-        state, u = ctrl.step(p, state, jnp.array([k * ts]), jnp.zeros(1), ts)
+        state, u = ctrl.step(p, state, jnp.array([k * ts]), jnp.zeros(1), ts, k * ts)
         outs.append(float(u[0]))
     k = np.arange(1, 200)
     np.testing.assert_allclose(outs, 1 - (0.05 / (0.05 + ts)) ** k, rtol=1e-12)
@@ -75,8 +75,8 @@ def test_clamping_freezes_the_integral_while_saturated():
     p = PIDParams(kp=1.0, ki=1.0, u_min=-1.0, u_max=1.0, anti_windup="clamping")
     ctrl = pid(p)
     s = ctrl.init(p, jnp.zeros(1), jnp.zeros(1))
-    for _ in range(100):
-        s, u = ctrl.step(p, s, jnp.array([5.0]), jnp.zeros(1), 0.01)
+    for k in range(100):
+        s, u = ctrl.step(p, s, jnp.array([5.0]), jnp.zeros(1), 0.01, 0.01 * k)
     assert float(u[0]) == 1.0 and float(s.integral[0]) == 0.0
 
 

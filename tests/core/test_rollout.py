@@ -13,7 +13,7 @@ from jaxsim.core.discretize import c2d_zoh
 from jaxsim.core.integrators import ExponentialEuler
 from jaxsim.core.rollout import ClosedLoop, Timing, fold, simulate
 from jaxsim.core.signals import Sine, Step
-from jaxsim.core.system import Estimator, gaussian_sensor
+from jaxsim.core.system import Controller, Estimator, gaussian_sensor
 from jaxsim.plants.second_order import static_plant
 
 PLANT = static_plant()
@@ -168,3 +168,22 @@ def test_gaussian_sensor_can_be_built_inside_jit():
     const = jax.jit(lambda: gaussian_sensor(0.1).params)()
     np.testing.assert_allclose(const, 0.1)
     assert run(0.0).shape == (10, 1)
+
+
+def _time_as_input(params, state, r, y, dt, t):
+    """A controller that outputs its tick time and counts ticks (to check ``t = k·Ts``)."""
+    return state + 1, jnp.reshape(t, (1,))
+
+
+def test_controller_receives_the_tick_time():
+    timing = Timing(t_final=0.5, dt=1e-3, controller_period=1e-2, save_every=5)
+    ctrl = Controller(None, lambda p, r0, y0: jnp.asarray(0), _time_as_input, name="clock")
+    tr = simulate(ClosedLoop(PLANT, ctrl), jnp.zeros(2), timing)
+    np.testing.assert_array_equal(np.asarray(tr.u)[:, 0], np.asarray(tr.t))
+    np.testing.assert_allclose(np.asarray(tr.t), np.arange(0, 50, 5) * 1e-2, rtol=0, atol=1e-15)
+
+
+def test_a_five_argument_controller_step_is_rejected_by_name():
+    old = Controller(None, lambda p, r0, y0: (), lambda p, s, r, y, dt: (s, r - y), name="old_style")
+    with pytest.raises(ValueError, match=r"controller 'old_style': step must accept \(params, state, r, y, dt, t\)"):
+        simulate(ClosedLoop(PLANT, old, reference=Step(1.0)), jnp.zeros(2), Timing(t_final=0.1, dt=1e-2))

@@ -33,3 +33,14 @@ def test_bad_width_and_name():
         sw.tanh_sign(1.0, 0.0)
     with pytest.raises(ValueError, match="switch"):
         sw.get_switch("sigmoid")
+
+
+def test_smooth_sign_is_tanh_for_positive_width_and_exact_sign_at_zero_with_finite_gradients():
+    np.testing.assert_array_equal(sw.smooth_sign(S, 0.2), jnp.tanh(S / 0.2))
+    np.testing.assert_array_equal(sw.smooth_sign(S, 0.0), jnp.sign(S))
+    # the width is a parameter: one jitted function serves both, and d/d(width) is finite at 0
+    f = jax.jit(sw.smooth_sign)
+    np.testing.assert_array_equal(f(S, 0.0), jnp.sign(S))
+    g = jax.grad(lambda w: jnp.sum(sw.smooth_sign(S, w)))
+    assert np.isfinite(float(g(0.0))) and np.isfinite(float(g(0.2)))
+    assert float(jax.grad(sw.smooth_sign)(0.0, 0.05)) == pytest.approx(20.0, rel=1e-12)

@@ -12,12 +12,12 @@ import brax.envs  # noqa: E402
 from brax.envs.wrappers.training import VmapWrapper, wrap  # noqa: E402
 
 import jaxsim.envs  # noqa: E402  (registers the envs)
-from experiments.trms_problem import Scenario, TRMSTuning  # noqa: E402
 from jaxsim.control.open_loop import open_loop  # noqa: E402
 from jaxsim.core.metrics import itae  # noqa: E402
 from jaxsim.core.rollout import ClosedLoop, Timing, simulate  # noqa: E402
 from jaxsim.envs import PlantEnv, Task, static_second_order_env, trms_env  # noqa: E402
 from jaxsim.plants.second_order import StaticParams, static_plant  # noqa: E402
+from jaxsim.problem.trms import Scenario, TRMSTuning  # noqa: E402
 
 N = 40  # ticks per rollout: short horizons keep compile and run times small
 

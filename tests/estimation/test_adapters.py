@@ -14,8 +14,15 @@ from jaxsim.core.linearize import linearize
 from jaxsim.core.rollout import ClosedLoop, Timing, simulate
 from jaxsim.core.signals import Step
 from jaxsim.core.system import gaussian_sensor
-from jaxsim.estimation.adapters import ekf_estimator, kalman_estimator, luenberger_estimator, ukf_estimator
-from jaxsim.estimation.lgssm import kalman_filter, lgssm
+from jaxsim.estimation.adapters import (
+    ekf_estimator,
+    filter_estimator,
+    kalman_estimator,
+    luenberger_estimator,
+    ukf_estimator,
+)
+from jaxsim.estimation.filtering import FilterMember
+from jaxsim.estimation.lgssm import kalman_filter, lgssm, linear_member
 from jaxsim.estimation.nonlinear import nonlinear_ssm
 from jaxsim.estimation.observers import current_observer_gain
 from jaxsim.plants.second_order import static_plant
@@ -78,3 +85,42 @@ def test_adapter_bad_input():
         kalman_estimator(model, read="state")
     with pytest.raises(ValueError, match="^form:"):
         kalman_estimator(model, form="sqrt")
+
+
+def test_one_filter_member_serves_the_scan_the_imm_and_the_closed_loop():
+    """The EKF member of a model is the same filter everywhere: the scanned EKF, a one-model IMM,
+    and the closed-loop adapter (on a linear model all equal the Kalman filter)."""
+    from jaxsim.estimation.ekf import ekf_member, extended_kalman_filter
+    from jaxsim.estimation.filtering import scan_member
+    from jaxsim.estimation.imm import imm, imm_filter, imm_init
+    from jaxsim.estimation.types import GaussianState
+
+    _, model = _setup()
+    nl = nonlinear_ssm(lambda p, x, u: model.F @ x, lambda p, x: model.H @ x, model.Q, model.R, model.m0, model.P0)
+    member = ekf_member(nl)
+    y = np.sin(np.linspace(0.0, 3.0, 40))[:, None]
+    mask = np.ones((40, 1), bool)
+    scanned = scan_member(member, GaussianState(nl.m0, nl.P0), jnp.asarray(y), jnp.asarray(mask))
+    np.testing.assert_array_equal(scanned.means, extended_kalman_filter(nl, y).means)
+    bank = imm_filter(imm([member], [[1.0]]), imm_init(nl.m0[None], nl.P0[None], [1.0]), y)
+    np.testing.assert_allclose(bank.means, scanned.means, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(scanned.means, kalman_filter(model, y).means, rtol=1e-10, atol=1e-12)
+    closed = _run(filter_estimator(linear_member(model.F, model.Q, model.H, model.R, model.B), model.m0, model.P0,
+                                   read="output"))
+    np.testing.assert_array_equal(closed.x_hat, _run(kalman_estimator(model, read="output")).x_hat)
+
+
+def test_filter_estimator_bad_input():
+    _, model = _setup()
+    bare = FilterMember(None, lambda p, s, u: s, lambda p, s, y, m: (s, None))
+    with pytest.raises(ValueError, match="^read: 'output' needs the member's observe"):
+        filter_estimator(bare, model.m0, model.P0, read="output")
+    member = linear_member(model.F, model.Q, model.H, model.R, model.B)
+    with pytest.raises(ValueError, match=r"^m0: expected shape \(n,\)"):
+        filter_estimator(member, np.zeros((2, 1)), model.P0)
+    with pytest.raises(ValueError, match="^P0: must be positive semi-definite"):
+        filter_estimator(member, model.m0, -np.eye(2))
+    with pytest.raises(ValueError, match="^member: expected a FilterMember"):
+        filter_estimator(model, model.m0, model.P0)
+    with pytest.raises(ValueError, match="^form:"):
+        linear_member(model.F, model.Q, model.H, model.R, form="sqrt")

@@ -5,7 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxsim.estimation.leader_predictor import leader_predictor
+from jaxsim.estimation.leader_predictor import LeaderEstimate, leader_predictor
 from jaxsim.plants.marine import rotation_z
 
 H, EVERY = 1e-3, 100  # control tick, ticks per camera frame (0.1 s)
@@ -58,13 +58,25 @@ def test_fit_exact_on_quartic_at_frames():
     n = 60 * EVERY
     reads = _run(est, target, n)
     ts = np.arange(n) * H
-    got = np.asarray(reads[:, 13:22]).reshape(n, 3, 3)
+    got = np.asarray(reads.target)
     truth = np.asarray(jax.vmap(target)(jnp.asarray(ts)))
     frames = np.arange(5100, n, EVERY)  # window full from frame 50 (t = 5.0 s) on
     np.testing.assert_allclose(got[frames], truth[frames], atol=1e-7)
     # zero-filled start: wrong before the window fills (the paper's start-up transient)
     # (window initialised with the follower's own position): the velocity is metres per second off
     assert np.abs(got[2000, 1] - truth[2000, 1]).max() > 1.0
+
+
+def test_read_is_a_named_leader_estimate():
+    """The controller reads named fields: the follower's own (INS) state as measured this tick and
+    the target point's position, velocity, acceleration, ``target`` stacking them row-wise."""
+    target = _poly([[3.0, 1.2], [0.0, 0.3], [1.2, 0.0]])
+    reads = _run(leader_predictor(51, 4, 0.1, mode="polynomial"), target, 250)
+    assert isinstance(reads, LeaderEstimate)
+    assert reads.follower.shape == (250, 12) and reads.position.shape == (250, 3)
+    ts = jnp.arange(250) * H
+    np.testing.assert_allclose(np.asarray(reads.follower), np.asarray(jax.vmap(_follower)(ts)), rtol=1e-14, atol=1e-15)
+    np.testing.assert_array_equal(np.asarray(reads.target[:, 1]), np.asarray(reads.velocity))
 
 
 def test_kalman_predicts_exactly_between_frames_on_constant_acceleration():
@@ -74,12 +86,12 @@ def test_kalman_predicts_exactly_between_frames_on_constant_acceleration():
     n = 60 * EVERY
     ts = jnp.arange(n) * H
     truth = np.asarray(jax.vmap(target)(ts))
-    kal = np.asarray(_run(leader_predictor(51, 4, 0.1, meas_std=1e-7, mode="kalman"), target, n)[:, 13:22])
-    hold = np.asarray(_run(leader_predictor(51, 4, 0.1, mode="hold"), target, n)[:, 13:22])
+    kal = np.asarray(_run(leader_predictor(51, 4, 0.1, meas_std=1e-7, mode="kalman"), target, n).target)
+    hold = np.asarray(_run(leader_predictor(51, 4, 0.1, mode="hold"), target, n).position)
     after = slice(5100, n)
-    np.testing.assert_allclose(kal.reshape(n, 3, 3)[after, :2], truth[after, :2], atol=1e-6)
+    np.testing.assert_allclose(kal[after, :2], truth[after, :2], atol=1e-6)
     # without prediction the held position lags by up to v·0.1 s
-    assert np.abs(hold.reshape(n, 3, 3)[after, 0] - truth[after, 0]).max() > 0.1
+    assert np.abs(hold[after] - truth[after, 0]).max() > 0.1
 
 
 def test_bad_input():

@@ -61,8 +61,9 @@ def fuzzy_pid_init(p: FuzzyPIDParams, r0: jax.Array, y0: jax.Array) -> FuzzyPIDS
 
 
 def fuzzy_pid_step(p: FuzzyPIDParams, s: FuzzyPIDState, r: jax.Array, y: jax.Array,
-                   ts: jax.Array) -> tuple[FuzzyPIDState, jax.Array]:
-    """One controller tick of period ``ts``; returns the new state and the (saturated) output."""
+                   ts: jax.Array, t: Any = None) -> tuple[FuzzyPIDState, jax.Array]:
+    """One controller tick of period ``ts`` (s) at tick time ``t`` (s; unused); returns the new
+    state and the (saturated) output."""
     e = r - y
     deriv = (p.tf * s.deriv + (e - s.prev)) / (p.tf + ts)
     v = _channel(p.p, e) + s.integral + _channel(p.d, deriv)

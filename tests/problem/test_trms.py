@@ -6,7 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from experiments.trms_problem import N_THETA, Scenario, TRMSTuning
+from jaxsim.problem.trms import N_THETA, Scenario, TRMSTuning
 from jaxsim.core.rollout import Timing, simulate
 
 SHORT = Scenario(t_final=3.0, pitch_period=2.0, yaw_period=3.0, yaw_delay=0.5)
