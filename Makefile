@@ -25,8 +25,9 @@ install-test: $(VENV)/.test
 run: $(VENV)/.core
 	$(PY) -m experiments run linear_pid_accuracy --out $(OUT)
 
+# one worker per core; a test file stays on one worker so its compiled functions are reused
 test: $(VENV)/.test
-	$(PY) -m pytest
+	$(PY) -m pytest -n auto --dist loadfile
 
 clean:
 	rm -rf $(VENV) .jax_cache .pytest_cache results
