@@ -14,19 +14,15 @@ they are tuned on the static plant ``2/((0.1s+1)(0.5s+1))`` over a set of operat
 with ``e_lin`` the analytic error of the linear P controller designed for maximum stability degree
 (:mod:`jaxsim.control.stability_degree`) and ``e_i(T)`` the simulated final error.
 
-Methods, each with the same budget of loss evaluations (``budget``; every evaluation simulates all
-operating points):
-
-* gradient: :func:`optim.tune` (optax Adam, forward-mode gradients through the rollout, ``n_starts``
-  starts stepping together from the paper's controller and perturbations of it, the constraints
-  by augmented Lagrangian), breakpoints kept ordered by :class:`optim.reparam.SortedBreakpoints` on
-  ``(a, c)`` and ``(b, d)``; on the gradient path the characteristic is the smooth (softplus) form
-  and the overshoot the smooth :func:`jaxsim.core.metrics.soft_overshoot`, bounded by
-  ``σ_max − 3τ`` because the surrogate reads a few temperatures low; the result is re-scored with
-  the exact ``J``;
-* particle swarm: :func:`optim.pso` on the box of ``(a, c − a, b, d − b)``, exact ``J``;
-* grid search: :func:`optim.grid_search` on the same box, exact ``J``;
-* references (not tuned): the paper's controller and the linear maximum-stability controller.
+``J`` is a :meth:`~jaxsim.problem.Problem.from_loss` problem (its ITAE is measured from ``y(T)``, not
+a running cost) over ``e = (a, c)``, ``u = (b, d)`` declared :class:`~jaxsim.problem.Sorted` (search
+coordinates ``(a, c − a, b, d − b)``: the box of swarm and grid), with the constraints ``h ≤ 0``.
+Methods, on equal budgets of loss evaluations (each simulates every point), through
+:func:`experiments.stages.tune_and_compare`: gradient (Adam, forward mode, ``n_starts`` starts from
+the paper's controller, augmented Lagrangian; on its path the characteristic is the softplus form
+and the overshoot :func:`~jaxsim.core.metrics.soft_overshoot`, bounded by ``σ_max − 3τ`` as the
+surrogate reads low; re-scored with the exact ``J``), :func:`optim.pso` and :func:`optim.grid_search`
+(exact ``J``); references: the paper's controller and the linear maximum-stability one.
 
 Then a full Mamdani and a zero-order Sugeno controller (:mod:`jaxsim.control.fuzzy.templates`,
 seven input terms) have their membership-function breakpoints tuned directly by gradient (same
@@ -37,7 +33,6 @@ characteristic exactly, so its initial point *is* the paper's controller.
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -47,7 +42,8 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from experiments.study import Study, StudyResult, assumption
+from experiments import stages
+from experiments.runner import Claim, Study, StudyResult, assumption
 from jaxsim.control import fuzzy as fz
 from jaxsim.control.fuzzy.controller import FuzzyPIDParams, fuzzy_pid_init, fuzzy_pid_step
 from jaxsim.control.fuzzy_steady_state import steady_state_error
@@ -57,12 +53,12 @@ from jaxsim.core.rollout import ClosedLoop, Timing, simulate
 from jaxsim.core.signals import Step
 from jaxsim.core.system import Controller
 from jaxsim.plants.second_order import StaticParams, static_plant, static_transfer_function
-from optim import SortedBreakpoints, compare, grid_search, plot_comparison, pso, tune
+from jaxsim.problem import ParamSpace, Problem, Sorted
+from optim import grid_search, pso, tune
 
 
 @dataclass(frozen=True)
 class Config:
-    quick: bool = False
     K: float = 2.0  # static plant, paper lines 468–470
     T1: float = 0.1
     T2: float = 0.5
@@ -71,19 +67,19 @@ class Config:
     overshoot_max: float = 2.0  # %
     u_max: float = 1.5
     penalty_weight: float = 100.0
-    dt: float = 2e-3  # s, plant step = controller period (quick: 4 ms)
-    t_final: float = 6.0  # s (quick: 4 s)
-    budget: int = 256  # loss evaluations per method (quick: 81)
+    dt: float = 2e-3  # s, plant step = controller period
+    t_final: float = 6.0  # s
+    budget: int = 256  # loss evaluations per method
     learning_rate: float = 0.05
     smooth_temperature: float = 0.01  # error units: softplus corners of the smooth characteristic
     overshoot_temperature: float = 0.05  # %: soft_overshoot temperature
-    n_starts: int = 8  # gradient: starts stepping together (steps = budget / n_starts; quick: 3)
+    n_starts: int = 8  # gradient: starts stepping together (steps = budget / n_starts)
     init_spread: float = 1.0  # gradient: spread of the extra starts in unconstrained space
     box_lo: tuple = (0.05, 0.05, 0.02, 0.0)  # (a, c − a, b, d − b)
     box_hi: tuple = (1.5, 1.5, 1.0, 1.5)
-    pso_particles: int = 16  # quick: 9 (iterations = budget / particles)
-    grid_points_per_dim: int = 4  # quick: 3 (4⁴ = 256 = budget)
-    fis_steps: int = 150  # gradient steps for the Mamdani and Sugeno controllers (quick: 15)
+    pso_particles: int = 16  # iterations = budget / particles
+    grid_points_per_dim: int = 4  # 4⁴ = 256 = budget
+    fis_steps: int = 150  # gradient steps for the Mamdani and Sugeno controllers
     fis_learning_rate: float = 0.02
     fis_grid: int = 101  # Mamdani output grid
     seed: int = 0
@@ -112,17 +108,20 @@ ASSUMPTIONS = {
         "the paper gives no membership functions; these start on the paper's characteristic"),
 }
 
+CLAIMS = [
+    Claim("k_mds", paper=0.4, rel_tol=1e-9, source="seed000 paper 1: K_mds = 0.4 for the static plant (spec §1.5)"),
+    Claim("settling_max_linear", paper=0.972, abs_tol=0.015,
+          source="spec §1.4 [our sim] (RK45, 1e-3 s): linear P, 2 % settling 0.972 s at every (g, f)",
+          note="tolerance: our sampling period (2 ms full, 4 ms quick, ≤ 10 ms) quantises the settling time"),
+    Claim("feasible_paper", paper=0.0, abs_tol=0.0,
+          source="spec §1.4 [our sim]: the paper's FC overshoots 6.25 % at f = 0.3 > σ_max = 2 %"),
+    Claim("initial_loss_sugeno_vs_paper_rel_diff", paper=0.0, abs_tol=1e-9,
+          source="the zero-order Sugeno template reproduces the paper's characteristic exactly"),
+]
 
-# ---------------------------------------------------------------------------------------------
-# The problem: closed-loop metrics of a P characteristic at every operating point
 
-
-def _controller(char: Any) -> Controller:
-    return Controller(FuzzyPIDParams(p=char), fuzzy_pid_init, fuzzy_pid_step, name="fuzzy_p")
-
-
-class Problem:
-    """Everything the losses need (plant, timing, points, linear references); no state changes."""
+class Loop:
+    """Plant, timing, operating points and the linear references; ``terms(char, smooth)`` → (f, h, details)."""
 
     def __init__(self, cfg: Config):
         self.cfg = cfg
@@ -133,15 +132,16 @@ class Problem:
         self.k_mds = max_stability_degree(num, den, "P").gains["kp"]
         self.e_lin = jnp.asarray([steady_state_error("static", cfg.K, fz.linear(self.k_mds), g=g, f=f).error
                                   for g, f in cfg.operating_points])
-        # exact J and metrics of a characteristic: one compiled function per characteristic type
         self.exact = jax.jit(lambda char: (self.penalised(char), self.terms(char, smooth=False)))
         self.rollouts_jit = jax.jit(self.rollouts)
 
     def rollouts(self, char: Any):
         """Per point: (t, y, u) of the closed loop with P characteristic ``char``."""
+        ctrl = Controller(FuzzyPIDParams(p=char), fuzzy_pid_init, fuzzy_pid_step, name="fuzzy_p")
+
         def one(gf):
-            loop = ClosedLoop(self.plant, _controller(char), reference=Step(gf[0]), disturbance=Step(gf[1]))
-            tr = simulate(loop, jnp.zeros(2), self.timing)
+            tr = simulate(ClosedLoop(self.plant, ctrl, reference=Step(gf[0]), disturbance=Step(gf[1])),
+                          jnp.zeros(2), self.timing)
             return tr.t, tr.y[:, 0], tr.u[:, 0]
 
         return jax.vmap(one)(self.points)
@@ -164,36 +164,40 @@ class Problem:
                              (overshoot - bound) / cfg.overshoot_max,
                              jnp.atleast_1d((u_peak - cfg.u_max) / cfg.u_max)])
         settling = jax.vmap(lambda tt, yy: step_info(tt, yy).settling_time)(t, y)
-        details = dict(itae=itae, overshoot=overshoot, e_final=e_final, u_peak=u_peak, settling=settling)
-        return jnp.mean(itae), h, details
+        return jnp.mean(itae), h, dict(itae=itae, overshoot=overshoot, e_final=e_final, u_peak=u_peak,
+                                       settling=settling)
 
-    def penalised(self, char: Any, smooth: bool = False) -> jax.Array:
-        f, h, _ = self.terms(char, smooth)
+    def penalised(self, char: Any) -> jax.Array:
+        f, h, _ = self.terms(char, smooth=False)
         return f + 0.5 * self.cfg.penalty_weight * jnp.sum(jnp.maximum(h, 0.0) ** 2)
 
+    def problem(self, name: str, space: ParamSpace, char_of: Callable[[Any], Any], smooth: bool) -> Problem:
+        """``J``'s objective ``f`` and constraints ``h`` of the characteristic ``char_of(params)``."""
+        return Problem.from_loss(name, space, lambda p, d, k: self.terms(char_of(p), smooth)[0],
+                                 constraints=lambda p: self.terms(char_of(p), smooth)[1],
+                                 penalty_weight=self.cfg.penalty_weight)
 
-def char_from_box(z: jax.Array) -> fz.ThreeSection:
-    """``(a, c − a, b, d − b)`` → the exact characteristic."""
-    return fz.ThreeSection(z[0], z[2], z[0] + z[1], z[2] + z[3], 0.01, "exact")
+
+def three_section_space(cfg: Config) -> ParamSpace:
+    """``e = (a, c)``, ``u = (b, d)`` from the paper's controller; box of ``(a, c − a, b, d − b)``."""
+    a, b, c, d = cfg.paper_fc
+    return ParamSpace(e=Sorted(lo=cfg.box_lo[:2], hi=cfg.box_hi[:2], init=(a, c), min_gap=0.02),
+                      u=Sorted(lo=cfg.box_lo[2:], hi=cfg.box_hi[2:], init=(b, d)))
 
 
-def char_from_sorted(params: dict, temperature: float, form: str) -> fz.ThreeSection:
+def char_of(params: dict, temperature: float, form: str) -> fz.ThreeSection:
     """``{"e": [a, c], "u": [b, d]}`` → the characteristic in the given form."""
     return fz.ThreeSection(params["e"][0], params["u"][0], params["e"][1], params["u"][1], temperature, form)
 
 
-# ---------------------------------------------------------------------------------------------
-# The runs
-
-
-def report(problem: Problem, char: Any, name: str, sims: int, wall_s: float, compile_s: float) -> dict:
+def report(loop: Loop, char: Any, name: str, sims: int = 0, wall_s: float = 0.0, compile_s: float = 0.0) -> dict:
     """Exact J and closed-loop metrics of one tuned (or reference) characteristic."""
-    J, (f, h, d) = problem.exact(char)
+    J, (f, h, d) = loop.exact(char)
     row = {"method": name, "loss_J": float(J), "mean_itae": float(f),
            "max_violation": float(jnp.max(h)), "feasible": bool(jnp.all(h <= 1e-9)),
            "settling_mean_s": float(jnp.mean(d["settling"])), "settling_max_s": float(jnp.max(d["settling"])),
            "overshoot_max_pct": float(jnp.max(d["overshoot"])), "u_peak": float(d["u_peak"]),
-           "e_ss_over_linear_max": float(jnp.max(d["e_final"] / problem.e_lin)),
+           "e_ss_over_linear_max": float(jnp.max(d["e_final"] / loop.e_lin)),
            "sims": int(sims), "wall_s": float(wall_s), "compile_s": float(compile_s)}
     if isinstance(char, fz.ThreeSection):
         row.update({k: float(getattr(char, k)) for k in "abcd"})
@@ -201,191 +205,133 @@ def report(problem: Problem, char: Any, name: str, sims: int, wall_s: float, com
     return row
 
 
-def run_three_section(problem: Problem, cfg: Config, progress: Callable[..., Any]):
-    n_pts = len(cfg.operating_points)
-    budget, particles, per_dim, starts = cfg.budget, cfg.pso_particles, cfg.grid_points_per_dim, cfg.n_starts
-    if per_dim ** 4 > budget or budget % particles or budget % starts:
+def compare_three_section(loop: Loop, cfg: Config, progress: Callable[..., Any]):
+    """Gradient (smooth surrogate, augmented Lagrangian), PSO and grid (exact J), equal budgets."""
+    n_pts, budget = len(cfg.operating_points), cfg.budget
+    if cfg.grid_points_per_dim ** 4 > budget or budget % cfg.pso_particles or budget % cfg.n_starts:
         raise ValueError("budget: must be a multiple of pso_particles and n_starts, and ≥ grid_points_per_dim**4")
-    lo, hi = jnp.asarray(cfg.box_lo), jnp.asarray(cfg.box_hi)
-    exact = lambda z: problem.penalised(char_from_box(z))  # noqa: E731
-    a, b, c, d = cfg.paper_fc
-    params0 = {"e": jnp.asarray([a, c]), "u": jnp.asarray([b, d])}
-    reparam = {"e": SortedBreakpoints(lo=0.0, min_gap=0.02), "u": SortedBreakpoints(lo=0.0)}
-    smooth = lambda p: problem.terms(char_from_sorted(p, cfg.smooth_temperature, "smooth"), smooth=True)  # noqa: E731
+    space = three_section_space(cfg)
+    exact = loop.problem("fuzzy_p_exact", space, lambda p: char_of(p, cfg.smooth_temperature, "exact"), False)
+    smooth = loop.problem("fuzzy_p_smooth", space, lambda p: char_of(p, cfg.smooth_temperature, "smooth"), True)
     key = jax.random.PRNGKey(cfg.seed)
-    runs = {
-        "gradient": lambda: tune(lambda p: smooth(p)[0], params0, optimizer=optax.adam(cfg.learning_rate),
-                                 steps=budget // starts, n_starts=starts, key=key,
-                                 init_spread=cfg.init_spread, reparam=reparam,
-                                 constraints=lambda p: smooth(p)[1], constraint_method="augmented_lagrangian",
-                                 penalty_weight=cfg.penalty_weight, sims_per_eval=n_pts, mode="forward"),
-        "pso": lambda: pso(exact, lo, hi, n_particles=particles, n_iters=budget // particles, key=key,
-                           sims_per_eval=n_pts),
-        "grid": lambda: grid_search(exact, lo, hi, points_per_dim=per_dim, sims_per_eval=n_pts),
+    tuners = {
+        "gradient": lambda _, __: tune(smooth, optimizer=optax.adam(cfg.learning_rate), steps=budget // cfg.n_starts,
+                                       n_starts=cfg.n_starts, key=key, init_spread=cfg.init_spread,
+                                       constraint_method="augmented_lagrangian", sims_per_eval=n_pts, mode="forward"),
+        "pso": lambda pb, _: pso(pb, n_particles=cfg.pso_particles, n_iters=budget // cfg.pso_particles, key=key,
+                                 sims_per_eval=n_pts),
+        "grid": lambda pb, _: grid_search(pb, points_per_dim=cfg.grid_points_per_dim, sims_per_eval=n_pts),
     }
-    bar = progress(total=len(runs), desc="fuzzy_pid_tuning (a, b, c, d)", unit="method")
-
-    comparison = compare(runs, on_done=lambda _: bar.update(1))
-    bar.close()
-    rows = []
-    for name, res in comparison.results.items():
-        char = (char_from_sorted(res.params, cfg.smooth_temperature, "exact") if name == "gradient"
-                else char_from_box(jnp.asarray(res.x)))
-        rows.append(report(problem, char, name, res.n_sims, res.wall_s, getattr(res, "compile_s", 0.0)))
-    rows.append(report(problem, fz.three_section(*cfg.paper_fc), "paper", 0, 0.0, 0.0))
-    rows.append(report(problem, fz.linear(problem.k_mds), "linear K_mds", 0, 0.0, 0.0))
-    return rows, comparison
+    cmp = stages.tune_and_compare(exact, budget * n_pts, tuners, progress=progress, figure="tuning_comparison",
+                                  loss_label="J (gradient: smooth surrogate), s²",
+                                  title="fuzzy P (a, b, c, d): J vs budget (simulations = evaluations × points)")
+    cmp.notes = [f"budget {budget} loss evaluations per method, each simulating {n_pts} operating points"]
+    rows = [report(loop, char_of(cmp.designs[name], cfg.smooth_temperature, "exact"), name, r.n_sims, r.wall_s,
+                   getattr(r, "compile_s", 0.0)) for name, r in cmp.comparison.results.items()]
+    rows.append(report(loop, fz.three_section(*cfg.paper_fc), "paper"))
+    rows.append(report(loop, fz.linear(loop.k_mds), "linear K_mds"))
+    return rows, cmp
 
 
-def run_fis(problem: Problem, cfg: Config, kind: str):
+def run_fis(loop: Loop, cfg: Config, kind: str):
     """Tune the breakpoints of a 7-term Mamdani or Sugeno P controller by gradient on the same J."""
-    n_pts = len(cfg.operating_points)
     u_range = 1.6 * cfg.u_max
+    decl = dict(e=Sorted(lo=0.02, hi=2.0, init=(0.375, 0.75, 1.2), min_gap=0.02),
+                u=Sorted(lo=0.0, hi=2.0, init=(0.15, 0.3, 1.0)))
+    if kind == "mamdani":
+        decl["width"] = Sorted(lo=0.0, hi=1.0, init=(0.1,), origin=0.01)  # one value > 0.01
 
     def build(p):
         if kind == "mamdani":
             return fz.odd_mamdani(p["e"], p["u"], p["width"][0], u_range=u_range, n_grid=cfg.fis_grid)
         return fz.odd_sugeno(p["e"], p["u"])
 
-    params0 = {"e": jnp.asarray([0.375, 0.75, 1.2]), "u": jnp.asarray([0.15, 0.3, 1.0])}
-    reparam = {"e": SortedBreakpoints(lo=0.0, min_gap=0.02), "u": SortedBreakpoints(lo=0.0)}
-    if kind == "mamdani":
-        params0["width"] = jnp.asarray([0.1])
-        reparam["width"] = SortedBreakpoints(lo=0.01)  # one positive value
-    steps = cfg.fis_steps
-    terms = lambda p: problem.terms(build(p), smooth=True)  # noqa: E731
-    res = tune(lambda p: terms(p)[0], params0, optimizer=optax.adam(cfg.fis_learning_rate), steps=steps,
-               reparam=reparam, constraints=lambda p: terms(p)[1], constraint_method="augmented_lagrangian",
-               penalty_weight=cfg.penalty_weight, sims_per_eval=n_pts, mode="forward")
-    fis0, fis = build(params0), build(res.params)
-    row = report(problem, fis, f"{kind} (gradient)", res.n_sims, res.wall_s, res.compile_s)
-    row0 = report(problem, fis0, f"{kind} (initial)", 0, 0.0, 0.0)
-    e = jnp.linspace(-2.5, 2.5, 251)
-    char = jax.jit(fz.static_characteristic)
+    problem = loop.problem(f"fuzzy_p_{kind}", ParamSpace(**decl), build, True)
+    res = tune(problem, optimizer=optax.adam(cfg.fis_learning_rate), steps=cfg.fis_steps,
+               constraint_method="augmented_lagrangian", sims_per_eval=len(cfg.operating_points), mode="forward")
+    fis0, fis = build(problem.space.init), build(res.params)
+    row = report(loop, fis, f"{kind} (gradient)", res.n_sims, res.wall_s, res.compile_s)
+    row0, e, char = report(loop, fis0, f"{kind} (initial)"), jnp.linspace(-2.5, 2.5, 251), jax.jit(fz.static_characteristic)
     u0, u = np.asarray(char(fis0, e)), np.asarray(char(fis, e))
     fit = fz.fit_three_section(e, u)
     row.update({f"fit_{k}": v for k, v in zip("abcd", fit.abcd)})
-    row["fit_rms"] = fit.rms
-    row["breakpoints_e"] = [round(float(v), 4) for v in res.params["e"]]
-    row["levels_u"] = [round(float(v), 4) for v in res.params["u"]]
-    return row, row0, (np.asarray(e), u0, u, fit), res
+    row.update(fit_rms=fit.rms, breakpoints_e=[round(float(v), 4) for v in res.params["e"]],
+               levels_u=[round(float(v), 4) for v in res.params["u"]])
+    return row, row0, (np.asarray(e), u0, u, fit)
 
 
-QUICK = dict(budget=81, pso_particles=9, grid_points_per_dim=3, n_starts=3, fis_steps=15, t_final=4.0, dt=4e-3)
-"""What ``--quick`` changes (CI smoke run): a smaller budget, a coarser and shorter simulation."""
+SHORT = {"gradient": "gradient", "pso": "pso", "grid": "grid", "paper": "paper", "linear K_mds": "linear",
+         "mamdani (gradient)": "mamdani", "sugeno (gradient)": "sugeno"}  # method → metric suffix
 
 
 def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
-    if cfg.quick:
-        cfg = dataclasses.replace(cfg, **QUICK)
-    problem = Problem(cfg)
+    loop = Loop(cfg)
     start = time.perf_counter()
-    rows, comparison = run_three_section(problem, cfg, progress)
+    rows, cmp = compare_three_section(loop, cfg, progress)
     fis_rows, fis_curves = [], {}
     for kind in progress(["mamdani", "sugeno"], desc="fuzzy_pid_tuning (fuzzy systems)", unit="system"):
-        row, row0, curve, _ = run_fis(problem, cfg, kind)
+        row, row0, fis_curves[kind] = run_fis(loop, cfg, kind)
         fis_rows += [row0, row]
-        fis_curves[kind] = curve
     by = {r["method"]: r for r in rows + fis_rows}
-    metrics = {
-        "tuned_loss_gradient": by["gradient"]["loss_J"],
-        "tuned_loss_pso": by["pso"]["loss_J"],
-        "tuned_loss_grid": by["grid"]["loss_J"],
-        "tuned_loss_paper": by["paper"]["loss_J"],
-        "tuned_loss_linear": by["linear K_mds"]["loss_J"],
-        "sims_gradient": by["gradient"]["sims"],
-        "sims_pso": by["pso"]["sims"],
-        "sims_grid": by["grid"]["sims"],
-        "wall_s_gradient": by["gradient"]["wall_s"],
-        "wall_s_pso": by["pso"]["wall_s"],
-        "wall_s_grid": by["grid"]["wall_s"],
-        "tuned_loss_mamdani": by["mamdani (gradient)"]["loss_J"],
-        "tuned_loss_sugeno": by["sugeno (gradient)"]["loss_J"],
-        "initial_loss_mamdani": by["mamdani (initial)"]["loss_J"],
-        "initial_loss_sugeno": by["sugeno (initial)"]["loss_J"],
-        "k_mds": problem.k_mds,
-        "budget_evals": cfg.budget,
-        "operating_points": len(cfg.operating_points),
-        "fis_steps": cfg.fis_steps,
-        "dt": cfg.dt,
-        "t_final": cfg.t_final,
-        "total_wall_s": time.perf_counter() - start,
-    }
-    for name in ("gradient", "pso", "grid", "paper", "linear K_mds", "mamdani (gradient)", "sugeno (gradient)"):
-        key = name.split(" ")[0]  # gradient, pso, grid, paper, linear, mamdani, sugeno
+    metrics = {**cmp.metrics, **{f"tuned_loss_{SHORT[n]}": by[n]["loss_J"] for n in SHORT}}
+    metrics.update({f"{k}_{n}": by[n][k] for n in ("gradient", "pso", "grid") for k in ("sims", "wall_s")})
+    metrics.update({f"initial_loss_{k}": by[f"{k} (initial)"]["loss_J"] for k in ("mamdani", "sugeno")})
+    metrics["initial_loss_sugeno_vs_paper_rel_diff"] = abs(metrics["initial_loss_sugeno"] / by["paper"]["loss_J"] - 1)
+    metrics.update(k_mds=loop.k_mds, budget_evals=cfg.budget, operating_points=len(cfg.operating_points),
+                   fis_steps=cfg.fis_steps, dt=cfg.dt, t_final=cfg.t_final, total_wall_s=time.perf_counter() - start)
+    for name, key in SHORT.items():
         metrics[f"settling_max_{key}"] = by[name]["settling_max_s"]
         metrics[f"overshoot_max_{key}"] = by[name]["overshoot_max_pct"]
         metrics[f"feasible_{key}"] = float(by[name]["feasible"])
-    figures = {
-        "tuning_comparison": plot_comparison(comparison, title="J (gradient: smooth surrogate) vs budget"),
-        "tuned_characteristics": _plot_characteristics(cfg, rows, fis_curves),
-        "tuned_transients": _plot_transients(problem, cfg, rows, fis_curves),
-    }
-    notes = [
-        "J is re-evaluated with the exact characteristic and exact overshoot for every method "
-        "(the gradient run's own curve is the smooth surrogate it optimised)",
-        "sims: loss evaluations × operating points; wall_s: optimisation time without compilation "
-        "(compile_s separately)",
-    ]
-    return StudyResult(metrics=metrics, tables={"three_section": rows, "fuzzy_systems": fis_rows},
-                       assumptions=ASSUMPTIONS, figures=figures, notes=notes)
+    figures = {**cmp.figures, "tuned_characteristics": _plot_characteristics(rows, fis_curves, loop.k_mds),
+               "tuned_transients": _plot_transients(loop, cfg, rows)}
+    return StudyResult(metrics=metrics, tables={"three_section": rows, "fuzzy_systems": fis_rows,
+                                                "tuners": cmp.tables["comparison"]}, figures=figures,
+                       notes=[*cmp.notes, "J is re-evaluated with the exact characteristic and exact overshoot for "
+                              "every method (the gradient run's own curve is the smooth surrogate it optimised)",
+                              "wall_s: optimisation time without compilation (compile_s separately)"])
 
 
-# ---------------------------------------------------------------------------------------------
-# Plots
-
-
-def _plot_characteristics(cfg, rows, fis_curves):
+def _plot_characteristics(rows, fis_curves, k_mds):
+    """Static characteristics u(e): the tuned three-section ones; the Mamdani/Sugeno ones with their fits."""
     import matplotlib.pyplot as plt
 
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 4.8))
     e = np.linspace(0, 2.5, 251)
     for r in rows:
-        if "a" in r:
-            u = np.asarray(fz.ThreeSection(r["a"], r["b"], r["c"], r["d"])(e))
-            ax1.plot(e, u, label=f"{r['method']}: J = {r['loss_J']:.4g}")
-    k = next(r for r in rows if r["method"] == "linear K_mds")
-    ax1.set_title("tuned three-section characteristics (u ≥ 0 half)")
-    ax1.set_xlabel("e")
-    ax1.set_ylabel("u")
-    ax1.grid(alpha=0.3)
-    ax1.legend(fontsize=8)
-    ax1.text(0.02, 0.95, f"linear K_mds: J = {k['loss_J']:.4g}", transform=ax1.transAxes, fontsize=8, va="top")
+        u = fz.ThreeSection(r["a"], r["b"], r["c"], r["d"])(e) if "a" in r else k_mds * e
+        ax1.plot(e, np.asarray(u), ":" if "a" not in r else "-", label=f"{r['method']}: J = {r['loss_J']:.4g}")
     for i, (kind, (ee, u0, u, fit)) in enumerate(fis_curves.items()):
         ax2.plot(ee, u0, ":", color=f"C{i}", lw=1, label=f"{kind}: initial")
         ax2.plot(ee, u, color=f"C{i}", lw=2, label=f"{kind}: tuned")
         ax2.plot(ee, np.asarray(fit.params(jnp.asarray(ee))), "--", color=f"C{i}", lw=1,
                  label=f"{kind} fit (a, b, c, d) = " + ", ".join(f"{v:.3f}" for v in fit.abcd))
     ax2.set_xlim(0, 2.5)
-    ax2.set_title("tuned Mamdani and Sugeno controllers: static characteristics")
-    ax2.set_xlabel("e")
-    ax2.set_ylabel("u")
-    ax2.grid(alpha=0.3)
-    ax2.legend(fontsize=7)
+    for ax, title in ((ax1, "tuned three-section characteristics (u ≥ 0 half)"),
+                      (ax2, "tuned Mamdani and Sugeno controllers: static characteristics")):
+        ax.set(title=title, xlabel="e (error units)", ylabel="u (control units)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
     fig.tight_layout()
     return fig
 
 
-def _plot_transients(problem, cfg, rows, fis_curves):
+def _plot_transients(loop, cfg, rows):
+    """Output at every operating point for the three-section designs and the linear reference."""
     import matplotlib.pyplot as plt
 
     chars = {r["method"]: fz.ThreeSection(r["a"], r["b"], r["c"], r["d"]) for r in rows if "a" in r}
-    chars["linear K_mds"] = fz.linear(problem.k_mds)
-    roll = problem.rollouts_jit
+    chars["linear K_mds"] = fz.linear(loop.k_mds)
     n = len(cfg.operating_points)
-    fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.8))
+    fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.8), squeeze=False)
     for name, char in chars.items():
-        t, y, _ = roll(char)
-        for i, ax in enumerate(np.atleast_1d(axes)):
+        t, y, _ = loop.rollouts_jit(char)
+        for i, ax in enumerate(axes[0]):
             ax.plot(np.asarray(t[i]), np.asarray(y[i]), lw=1.2, label=name)
-    for i, ax in enumerate(np.atleast_1d(axes)):
-        g, f = cfg.operating_points[i]
-        ax.set_title(f"g = {g}, f = {f}")
-        ax.set_xlim(0, 2.5)
-        ax.set_xlabel("t, s")
+    for ax, (g, f) in zip(axes[0], cfg.operating_points):
+        ax.set(title=f"g = {g}, f = {f}", xlim=(0, 2.5), xlabel="t, s", ylabel="y")
         ax.grid(alpha=0.3)
-    np.atleast_1d(axes)[0].set_ylabel("y")
-    np.atleast_1d(axes)[0].legend(fontsize=7)
+    axes[0, 0].legend(fontsize=7)
     fig.tight_layout()
     return fig
 
@@ -394,6 +340,10 @@ STUDY = Study(
     name="fuzzy_pid_tuning",
     description="Fuzzy-PID paper: tune (a, b, c, d) by gradient vs PSO vs grid on ITAE with e_ss/overshoot/|u| "
                 "constraints; tune Mamdani and Sugeno breakpoints",
-    config_cls=Config,
+    config=Config,
+    presets={"quick": dict(budget=81, pso_particles=9, grid_points_per_dim=3, n_starts=3, fis_steps=15,
+                           t_final=4.0, dt=4e-3)},
+    claims=CLAIMS,
+    assumptions=ASSUMPTIONS,
     run=run,
 )

@@ -5,6 +5,8 @@
 * :func:`responses` — step-response metrics (``step_info``) and the response figure of designs;
 * :func:`robustness` — Monte Carlo of designs over the problem's uncertainty: the percentile table
   straight from the Monte-Carlo result, flat metrics, a percentile-band figure;
+* :func:`pyswarms_search` — pyswarms' GlobalBestPSO on a problem's box (the reference swarm
+  library as one more tuner of :func:`tune_and_compare`);
 * :func:`merge` — stages (and extra metrics/notes) into one :class:`~experiments.study.StudyResult`.
 
 Metric names: ``loss_<tuner>``, ``sims_<tuner>``, ``wall_s_<tuner>``, ``loss_at_common_sims_<tuner>``,
@@ -14,14 +16,22 @@ Metric names: ``loss_<tuner>``, ``sims_<tuner>``, ``wall_s_<tuner>``, ``loss_at_
 
 from __future__ import annotations
 
+import contextlib
+import logging
+import tempfile
+import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
+
+import jax.numpy as jnp
+import numpy as np
 
 import jaxsim.montecarlo as mc
 from experiments import figures
 from experiments.study import StudyResult
 from jaxsim.core.metrics import step_info
 from optim.compare import Comparison, compare, comparison_metrics
+from optim.results import History, TuneResult
 
 
 @dataclass
@@ -140,6 +150,40 @@ def robustness(problem: Any, designs: dict[str, Any], n: int, key: Any, *, band_
     return Stage(metrics=metrics, tables={table: rows}, figures={figure: fig},
                  notes=[f"Monte Carlo: {n} runs per design over {unc}, common random numbers across designs; "
                         "quantiles from the streaming sketch (relative error ≤ 1e-3)"], data=results)
+
+
+def pyswarms_search(problem: Any, n_particles: int, n_iters: int, *, seed: int, inertia: float = 0.7,
+                    c1: float = 1.5, c2: float = 1.5) -> TuneResult:
+    """pyswarms' ``GlobalBestPSO`` (global best, constant ``inertia``, ``c1``, ``c2``) on the problem's
+    box in search coordinates, evaluating the problem's jitted batched :meth:`search_loss` (non-finite
+    losses count as ``+inf``); ``n_particles·n_iters`` simulations per scenario; ``params`` of the
+    result is the params dict.  ``seed`` seeds NumPy's global generator, which pyswarms draws from."""
+    lo, hi = problem.space.box
+    batched = problem.jitted.search_losses
+    np.random.seed(seed)
+    # pyswarms' reporters open ./report.log (at import and per optimiser): keep it out of the cwd
+    with tempfile.TemporaryDirectory() as tmp, contextlib.chdir(tmp):
+        import pyswarms as ps
+
+        logging.getLogger("pyswarms").setLevel(logging.WARNING)
+        opt = ps.single.GlobalBestPSO(n_particles=n_particles, dimensions=lo.size,
+                                      options={"c1": c1, "c2": c2, "w": inertia}, bounds=(lo, hi))
+    stamps = []
+
+    def objective(x):
+        out = np.asarray(batched(jnp.asarray(x)))
+        stamps.append(time.perf_counter())
+        return np.where(np.isfinite(out), out, np.inf)
+
+    batched(jnp.asarray(np.tile((lo + hi) / 2, (n_particles, 1)))).block_until_ready()  # compile
+    start = time.perf_counter()
+    best, pos = opt.optimize(objective, iters=n_iters, verbose=False)
+    wall = time.perf_counter() - start
+    hist = np.minimum.accumulate(np.asarray(opt.cost_history, float))
+    sims = n_particles * problem.sims_per_eval * np.arange(1, hist.size + 1)
+    history = History(hist, sims, np.asarray(stamps[: hist.size]) - start)
+    return TuneResult(problem.space.from_search(jnp.asarray(pos)), float(best), history, int(sims[-1]), wall,
+                      message="pyswarms GlobalBestPSO")
 
 
 def merge(*stages: Stage, metrics: dict[str, float] | None = None, notes: Sequence[str] = (),

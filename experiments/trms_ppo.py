@@ -116,3 +116,12 @@ def train_and_evaluate(problem: TRMSTuning, settings: PPOSettings) -> PPOResult:
     return PPOResult(loss=Breakdown(*(float(v) for v in loss)), loss_exact_friction=-float(np.sum(exact.reward)),
                      env_steps=env_steps, wall_s=wall, rollout=exact,
                      rollout_loss=-float(np.sum(smooth.reward)))
+
+
+def ppo_baseline(problem: TRMSTuning, settings: PPOSettings) -> PPOResult | None:
+    """:func:`train_and_evaluate`, or ``None`` when ``num_timesteps`` is 0 or brax is not installed."""
+    import importlib.util
+
+    if settings.num_timesteps <= 0 or importlib.util.find_spec("brax") is None:
+        return None
+    return train_and_evaluate(problem, settings)
