@@ -7,7 +7,7 @@ PIP     = $(VENV)/bin/python -m pip
 PY      = $(VENV)/bin/python
 OUT    ?= results/linear_pid_accuracy
 
-.PHONY: run test docs install install-test clean
+.PHONY: run test lint docs install install-test clean
 
 $(VENV)/.core: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -32,6 +32,11 @@ run: $(VENV)/.core
 # one worker per core; a test file stays on one worker so its compiled functions are reused
 test: $(VENV)/.test
 	$(PY) -m pytest -n auto --dist loadfile
+
+# ruff lint and format check (configured in pyproject.toml)
+lint: $(VENV)/.test
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/ruff format --check .
 
 # the API reference site into site/; --strict: a broken reference or docstring fails the build
 docs: $(VENV)/.docs
