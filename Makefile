@@ -7,12 +7,16 @@ PIP     = $(VENV)/bin/python -m pip
 PY      = $(VENV)/bin/python
 OUT    ?= results/linear_pid_accuracy
 
-.PHONY: run test install install-test clean
+.PHONY: run test lint docs install install-test clean
 
 $(VENV)/.core: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PIP) install --upgrade pip
 	$(PIP) install -e .
+	touch $@
+
+$(VENV)/.docs: $(VENV)/.core
+	$(PIP) install -e ".[docs]"
 	touch $@
 
 $(VENV)/.test: $(VENV)/.core
@@ -29,5 +33,14 @@ run: $(VENV)/.core
 test: $(VENV)/.test
 	$(PY) -m pytest -n auto --dist loadfile
 
+# ruff lint and format check (configured in pyproject.toml)
+lint: $(VENV)/.test
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/ruff format --check .
+
+# the API reference site into site/; --strict: a broken reference or docstring fails the build
+docs: $(VENV)/.docs
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir site
+
 clean:
-	rm -rf $(VENV) .jax_cache .pytest_cache results
+	rm -rf $(VENV) .jax_cache .pytest_cache results site

@@ -6,10 +6,12 @@ whose equations and parameters are **not given**.  We substitute a public linear
 * sway–yaw: the linear part of the Mariner-class model (L = 160.93 m, U0 = 7.7175 m/s; hydrodynamic
   derivatives of Chislett & Strøm-Tejsen 1965, as tabulated in Fossen's Marine Systems Simulator,
   ``mariner.m``), in the non-dimensional "prime" system ``v' = v/U0``, ``r' = rL/U0``,
-  ``t' = tU0/L``::
+  ``t' = tU0/L``:
 
-      [m' − Y'v̇    m'x'G − Y'ṙ] [v̇']   [Y'v  Y'r] [v']   [Y'δ]
-      [m'x'G − N'v̇  I'z − N'ṙ ] [ṙ'] = [N'v  N'r] [r'] + [N'δ] δ
+  ```text
+  [m' − Y'v̇    m'x'G − Y'ṙ] [v̇']   [Y'v  Y'r] [v']   [Y'δ]
+  [m'x'G − N'v̇  I'z − N'ṙ ] [ṙ'] = [N'v  N'r] [r'] + [N'δ] δ
+  ```
 
 * surge: ``(m' − X'u̇) u̇' = X'u (u' − u'_c)``, a first-order response of the speed perturbation ``u``
   to the commanded perturbation ``u_c`` (the engine-speed control, our assumption; time constant
