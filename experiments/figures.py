@@ -5,6 +5,8 @@
 * :func:`mc_bands` — Monte-Carlo percentile bands of a response over the problem's uncertainty;
 * :func:`tuning_curve` — a gradient tuner's loss per step (current and best so far);
 * :func:`probability_curves` — event probabilities with their confidence intervals vs a parameter;
+* :func:`mc_cdfs` — empirical CDFs (from the quantile sketches) of Monte-Carlo metrics, one line per result;
+* :func:`line_panels` — side-by-side panels of labelled curves (characteristics, transients), declared as data;
 * :func:`box_by_group` — box plots of one quantity per group (Monte-Carlo cases), with a reference line.
 """
 
@@ -144,5 +146,49 @@ def probability_curves(x: Any, curves: dict[str, tuple[Any, Any, Any]], *, x_lab
         ax.set_title(title)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+def mc_cdfs(results: dict[str, Any], metrics: dict[str, tuple[str, bool]], *, title: str | None = None):
+    """One panel per ``metrics[name] = (x label with unit, log x)``: the CDF of that metric of each
+    :class:`jaxsim.montecarlo.MonteCarloResult` in ``results`` (label → result), from its quantiles."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, len(metrics), figsize=(5 * len(metrics), 3.8), squeeze=False)
+    q = np.linspace(0.01, 0.99, 99)
+    for ax, (name, (x_label, log)) in zip(axes[0], metrics.items()):
+        for label, res in results.items():
+            ax.plot(np.asarray(res[name].quantile(q)), q, label=label)
+        ax.set(xlabel=x_label, ylabel="cumulative probability", xscale="log" if log else "linear")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def line_panels(panels: list[dict[str, Any]], *, title: str | None = None, size: tuple[float, float] = (6.0, 4.5)):
+    """One axis per panel; a panel is a dict with ``lines`` (label → ``(x, y)`` or ``(x, y, style)``),
+    ``x_label``, ``y_label`` (with units) and optionally ``title``, ``xlim``, ``ylim``, ``log_y``,
+    ``hline`` (a reference level drawn in black)."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, len(panels), figsize=(size[0] * len(panels), size[1]), squeeze=False)
+    for ax, panel in zip(axes[0], panels):
+        for label, line in panel["lines"].items():
+            x, y, *style = line
+            ax.plot(np.asarray(x), np.asarray(y), *style, label=label)
+        if panel.get("hline") is not None:
+            ax.axhline(panel["hline"], color="k", lw=0.6)
+        ax.set(xlabel=panel["x_label"], ylabel=panel["y_label"], title=panel.get("title", ""))
+        if panel.get("log_y"):
+            ax.set_yscale("log")
+        for lim in ("xlim", "ylim"):
+            if panel.get(lim) is not None:
+                getattr(ax, f"set_{lim}")(*panel[lim])
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    if title:
+        fig.suptitle(title)
     fig.tight_layout()
     return fig
