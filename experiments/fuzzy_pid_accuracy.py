@@ -1,27 +1,22 @@
 """Study ``fuzzy_pid_accuracy``: steady-state accuracy of fuzzy vs linear control (the fuzzy-PID paper).
 
-Seed 000, paper 1 (spec ``seed000_fuzzy_pid_smo_predictor.md`` §1.1–1.4).  Plants: static
-``2/((0.1s+1)(0.5s+1))`` and astatic ``2/(s(0.1s+1))``; the disturbance enters as ``u − f``.
+Seed 000, paper 1 (spec ``seed000_fuzzy_pid_smo_predictor.md`` §1.1–1.4); plants, controllers and the
+batched simulation of cases are :mod:`jaxsim.problem.fuzzy_accuracy`.
 
 1. The linear baselines are designed by :func:`jaxsim.control.stability_degree.max_stability_degree`
    (P: ``K_mds`` = 0.4 and 1.25, PI: triple-root designs) — computed, not typed in.
 2. The paper's four cases (static g = 1, f = 0 / 0.3; astatic g = 1 with f = 0.2 / 0.7) are solved
    analytically (:mod:`jaxsim.control.fuzzy_steady_state`: equations (1)/(2) and their domains) and
-   simulated in closed loop with the paper's fuzzy characteristics and the linear controllers; the
-   settling time (2 %) and overshoot of every case come from the simulation.
+   simulated in closed loop; settling time (2 %) and overshoot of every case come from the simulation.
 3. Analytic vs simulated steady-state error over a grid of ``(g, f, K_g, K_f)`` for linear/fuzzy
    P and PI on both plants, including the cases without a steady state (detected as drift).
-4. Figures 2–6 of the paper: the static characteristic of a Mamdani controller and its
+4. Figures 2–6 of the paper: a Mamdani controller fitted to the paper's characteristic and its
    three-section least-squares approximation (Fig. 2), FC1/FC2 vs ``K_mds`` (Fig. 3), the
    transients of the four cases (Figs. 4–5) and fuzzy PI vs linear PI (Fig. 6).
-
-All simulations: RK4, plant step = controller period = ``dt``, zero initial state, steps and ramps
-applied at t = 0.  One vmapped rollout per (plant, controller structure).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -31,54 +26,50 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from experiments.study import Study, StudyResult, assumption
+from experiments import figures, stages
+from experiments.runner import Claim, Study, StudyResult, assumption
 from jaxsim.control import fuzzy as fz
 from jaxsim.control.fuzzy_steady_state import section_domains, steady_state_error
-from jaxsim.control.stability_degree import max_stability_degree
-from jaxsim.core.metrics import step_info, steady_state
-from jaxsim.core.rollout import ClosedLoop, Timing, simulate
-from jaxsim.core.signals import Ramp, Step, Sum
-from jaxsim.plants.second_order import (
-    AstaticParams,
-    StaticParams,
-    astatic_plant,
-    astatic_transfer_function,
-    static_plant,
-    static_transfer_function,
+from jaxsim.problem.fuzzy_accuracy import (
+    CONTROLLERS,
+    PLANTS,
+    AccuracySetup,
+    Case,
+    channels,
+    designs,
+    mamdani_fit_problem,
+    run_all,
+    small_gain,
 )
-
-PLANTS = ("static", "astatic")
-CONTROLLERS = ("linear P", "fuzzy P", "linear PI", "fuzzy PI")
 
 
 @dataclass(frozen=True)
-class Config:
-    quick: bool = False
-    K_static: float = 2.0  # paper lines 468–470
-    T1: float = 0.1
-    T2: float = 0.5
-    K_astatic: float = 2.0  # paper line 609
-    T_astatic: float = 0.1
-    fc_static: tuple = (0.75, 0.3, 1.2, 1.0)  # (a, b, c, d), paper line 488
-    fc_astatic: tuple = (0.2, 0.25, 1.2, 2.0)  # paper lines 619–620
+class Config(AccuracySetup):  # + the plants, characteristics, fuzzy PI and simulation of AccuracySetup
     g: float = 1.0  # "single step reference g = 1"
     f_static: tuple = (0.0, 0.3)  # Fig. 4a, 4b
     f_astatic: tuple = (0.2, 0.7)  # Fig. 5a, 5b
     fc1_static: tuple = (0.5, 0.3, 1.2, 1.0)  # Fig. 3 "FC1" (larger K1): assumed
-    pi_p_gain_ratio: float = 1.5  # fuzzy PI, P channel: K2/K1 (assumed)
-    pi_i_breakpoints: tuple = (0.05, 0.3)  # fuzzy PI, I channel: (a_i, c_i) (assumed)
-    pi_i_gain_ratio: float = 2.0  # fuzzy PI, I channel: K2/K1 (assumed)
     fig6_f: float = 0.5  # Fig. 6 constant disturbance (assumed)
     grid_g: tuple = (0.5, 1.5)
     grid_f: tuple = (0.0, 0.3, 0.8, 2.5)
     grid_g_slope: tuple = (0.0, 0.3)
     grid_f_slope: tuple = (0.0, 0.15, 2.0)
-    dt: float = 1e-3  # s, plant step and controller period
-    t_final: float = 20.0  # s: the slowest grid case (fuzzy PI, f = 2.5 and ramps) needs ~15 s
-    drift_window: float = 1.0  # s: a steady state must not drift over the last window
-    drift_rtol: float = 1e-6
     mamdani_fit_steps: int = 400  # Fig. 2: Adam steps fitting the Mamdani to the characteristic
 
+
+PRESETS = {"quick": dict(grid_g=(1.5,), grid_f=(0.3, 2.5), mamdani_fit_steps=60)}
+SOURCE = "seed 000 paper 1, §1.4 (spec; the paper prints two decimals)"
+CLAIMS = [
+    Claim("kp_mds_static", paper=0.4, rel_tol=1e-6, source="seed 000 paper 1, §1.3: K_mds = 0.4 (static plant)"),
+    Claim("kp_mds_astatic", paper=1.25, rel_tol=1e-6, source="seed 000 paper 1, §1.3: K_mds = 1.25 (astatic plant)"),
+    *(Claim(f"ess_{case}", paper=v, abs_tol=0.005, source=f"{SOURCE}, item {item}", note=note)
+      for case, v, item, note in (
+          ("static_f0_fuzzy", 0.56, 1, "exact 5/9"), ("static_f0_linear", 0.56, 1, "exact 5/9"),
+          ("static_f03_fuzzy", 0.81, 2, "eq. (2)"), ("static_f03_linear", 0.89, 2, "exact 8/9"),
+          ("astatic_f02_fuzzy", 0.16, 3, "f/K1"), ("astatic_f02_linear", 0.16, 3, "f/K1"),
+          ("astatic_f07_fuzzy", 0.46, 4, "a + (f − b)/K2"),
+          ("astatic_f07_linear", 0.56, 4, "the paper's formula is lost; f/K_mds [ours]"))),
+]
 
 ASSUMPTIONS = {
     "disturbance_sign": assumption("u − f", "the sign that reproduces every number in the paper"),
@@ -111,160 +102,13 @@ ASSUMPTIONS = {
 }
 
 
-# ---------------------------------------------------------------------------------------------
-# Controllers of the study
-
-
-def designs(cfg: Config) -> dict[tuple[str, str], dict[str, float]]:
-    """Maximum-stability-degree P and PI gains for both plants (computed)."""
-    tfs = {"static": static_transfer_function(StaticParams(cfg.K_static, cfg.T1, cfg.T2)),
-           "astatic": astatic_transfer_function(AstaticParams(cfg.K_astatic, cfg.T_astatic))}
-    out = {}
-    for plant, (num, den) in tfs.items():
-        for structure in ("P", "PI"):
-            out[(plant, structure)] = max_stability_degree(np.asarray(num), np.asarray(den), structure).gains
-    return out
-
-
-def channels(cfg: Config, gains: dict, plant: str, controller: str) -> tuple[Any, Any]:
-    """``(p, i)`` characteristics of one of the four controllers on one plant."""
-    fc = cfg.fc_static if plant == "static" else cfg.fc_astatic
-    if controller == "linear P":
-        return fz.linear(gains[(plant, "P")]["kp"]), None
-    if controller == "fuzzy P":
-        return fz.three_section(*fc), None
-    pi = gains[(plant, "PI")]
-    if controller == "linear PI":
-        return fz.linear(pi["kp"]), fz.linear(pi["ki"])
-    a, _, c, _ = fc
-    a_i, c_i = cfg.pi_i_breakpoints
-    p = fz.from_gains(pi["kp"], cfg.pi_p_gain_ratio * pi["kp"], a, c)
-    i = fz.from_gains(pi["ki"], cfg.pi_i_gain_ratio * pi["ki"], a_i, c_i)
-    return p, i
-
-
-def _plant(cfg: Config, name: str):
-    if name == "static":
-        return static_plant(StaticParams(cfg.K_static, cfg.T1, cfg.T2))
-    return astatic_plant(AstaticParams(cfg.K_astatic, cfg.T_astatic))
-
-
-# ---------------------------------------------------------------------------------------------
-# Batched closed-loop simulation
-
-
-class Case(dict):
-    """One simulation: plant, controller label, channel characteristics and the input signals."""
-
-
-def _stack(trees: list) -> Any:
-    return jax.tree_util.tree_map(lambda *xs: np.stack([np.asarray(x, float) for x in xs]), *trees)
-
-
-def simulate_cases(cfg: Config, cases: list[Case], timing: Timing, tail: int, save_every: int):
-    """Simulate cases of one plant and one controller structure in one vmapped rollout.
-
-    Returns per case: final error, drift flag, settling time, overshoot, and decimated (t, y, u).
-    """
-    plant = _plant(cfg, cases[0]["plant"])
-    params = _stack([fz.fuzzy_pid(c["p"], c["i"]).params for c in cases])
-    template = fz.fuzzy_pid(cases[0]["p"], cases[0]["i"])
-    sig = jnp.asarray([[c["g"], c["g_slope"], c["f"], c["f_slope"]] for c in cases], float)
-
-    def one(p, s):
-        ref = Sum((Step(s[0]), Ramp(s[1])))
-        dist = Sum((Step(s[2]), Ramp(s[3])))
-        loop = ClosedLoop(plant, dataclasses.replace(template, params=p), reference=ref, disturbance=dist)
-        tr = simulate(loop, jnp.zeros(plant.n_states), timing)
-        e = tr.r[:, 0] - tr.y[:, 0]
-        ss = steady_state(e, tail, rtol=cfg.drift_rtol)
-        info = step_info(tr.t, tr.y[:, 0])
-        return (ss.value, ss.converged, info.settling_time, info.overshoot,
-                tr.t[::save_every], tr.y[::save_every, 0], tr.u[::save_every, 0])
-
-    out = jax.jit(jax.vmap(one))(params, sig)
-    return [tuple(np.asarray(o[k]) for o in out) for k in range(len(cases))]
-
-
-def _structure_key(case: Case) -> tuple:
-    return (case["plant"], jax.tree_util.tree_structure(fz.fuzzy_pid(case["p"], case["i"]).params))
-
-
-def run_all(cfg: Config, cases: list[Case], progress: Callable[..., Any]) -> None:
-    """Simulate every case (grouped by plant and controller structure); results are stored in place."""
-    timing = Timing(t_final=cfg.t_final, dt=cfg.dt)
-    tail = max(2, int(round(cfg.drift_window / cfg.dt)))
-    save_every = 10
-    groups: dict[tuple, list[Case]] = {}
-    for c in cases:
-        groups.setdefault(_structure_key(c), []).append(c)
-    for key in progress(list(groups), desc="fuzzy_pid_accuracy", unit="group"):
-        group = groups[key]
-        for c, res in zip(group, simulate_cases(cfg, group, timing, tail, save_every)):
-            c["e_sim"], c["converged"], c["settling"], c["overshoot"], c["t"], c["y"], c["u"] = res
-
-
-# ---------------------------------------------------------------------------------------------
-# Fig. 2: a Mamdani controller whose three-section approximation is the paper's
-
-
-def _sorted_positive(theta: jax.Array) -> jax.Array:
-    return jnp.cumsum(jax.nn.softplus(theta))
-
-
-def fit_mamdani_to_characteristic(cfg: Config, target: Any, e: jax.Array):
-    """Breakpoints of :func:`fz.odd_mamdani` fitted (Adam, least squares) to ``target(e)``."""
-    u_range = 1.6 * float(target.d)
-    u_ref = target(e)
-
-    def build(theta):
-        return fz.odd_mamdani(_sorted_positive(theta[:2]), _sorted_positive(theta[2:4]),
-                              jax.nn.softplus(theta[4]), u_range=u_range, n_grid=161)
-
-    def loss(theta):
-        return jnp.mean((fz.static_characteristic(build(theta), e) - u_ref) ** 2)
-
-    a, b, c, d = (float(v) for v in (target.a, target.b, target.c, target.d))
-    inv = lambda x: np.log(np.expm1(x))  # noqa: E731  (softplus⁻¹)
-    theta = jnp.asarray([inv(a), inv(c - a), inv(b), inv(d - b), inv(0.2 * d)])
-    opt = optax.adam(0.03)
-
-    @jax.jit
-    def step(theta, state):
-        value, grad = jax.value_and_grad(loss)(theta)
-        updates, state = opt.update(grad, state)
-        return optax.apply_updates(theta, updates), state, value
-
-    state = opt.init(theta)
-    steps = 60 if cfg.quick else cfg.mamdani_fit_steps
-    for _ in range(steps):
-        theta, state, _ = step(theta, state)
-    _, _, final = step(theta, state)  # the loss at the final theta (same compiled function)
-    return build(theta), float(jnp.sqrt(final))
-
-
-# ---------------------------------------------------------------------------------------------
-
-
-def _small_gain(char: Any) -> float:
-    if isinstance(char, fz.Linear):
-        return float(char.gain)
-    return float(char.b) / float(char.a)
-
-
-_evaluate = jax.jit(lambda char, e: char(e))  # characteristics on a grid, for plots
-
-
 def _case_key(plant: str, f: float) -> str:
     return f"{plant}_f{f:g}".replace(".", "")  # f = 0.3 → "static_f03"
 
 
-def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
-    gains = designs(cfg)
-    K = {"static": cfg.K_static, "astatic": cfg.K_astatic}
+def build_cases(cfg: Config, gains: dict) -> list[Case]:
+    """The paper's four cases (fuzzy and linear P), Fig. 3's FC1, Fig. 6's PIs and the grid."""
     cases: list[Case] = []
-
-    # the paper's four cases, both controllers
     paper_f = {"static": cfg.f_static, "astatic": cfg.f_astatic}
     for plant in PLANTS:
         for f in paper_f[plant]:
@@ -272,106 +116,89 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
                 p, i = channels(cfg, gains, plant, ctrl)
                 cases.append(Case(kind="paper", plant=plant, controller=ctrl, p=p, i=i, g=cfg.g,
                                   g_slope=0.0, f=f, f_slope=0.0))
-    # Fig. 3 (FC1) and Fig. 6 (PI on the astatic plant)
     cases.append(Case(kind="fig3", plant="static", controller="FC1", p=fz.three_section(*cfg.fc1_static),
                       i=None, g=cfg.g, g_slope=0.0, f=0.0, f_slope=0.0))
     for ctrl in ("linear PI", "fuzzy PI"):
         p, i = channels(cfg, gains, "astatic", ctrl)
         cases.append(Case(kind="fig6", plant="astatic", controller=ctrl, p=p, i=i, g=cfg.g, g_slope=0.0,
                           f=cfg.fig6_f, f_slope=0.0))
-    # the (g, f, K_g, K_f) grid
-    if cfg.quick:
-        grid = list(itertools.product((cfg.grid_g[-1],), (cfg.grid_f[1], cfg.grid_f[-1]),
-                                      cfg.grid_g_slope, cfg.grid_f_slope))
-    else:
-        grid = list(itertools.product(cfg.grid_g, cfg.grid_f, cfg.grid_g_slope, cfg.grid_f_slope))
+    grid = list(itertools.product(cfg.grid_g, cfg.grid_f, cfg.grid_g_slope, cfg.grid_f_slope))
     for plant in PLANTS:
         for ctrl in CONTROLLERS:
             p, i = channels(cfg, gains, plant, ctrl)
-            for g, f, kg, kf in grid:
-                cases.append(Case(kind="grid", plant=plant, controller=ctrl, p=p, i=i, g=g, g_slope=kg,
-                                  f=f, f_slope=kf))
+            cases += [Case(kind="grid", plant=plant, controller=ctrl, p=p, i=i, g=g, g_slope=kg, f=f, f_slope=kf)
+                      for g, f, kg, kf in grid]
+    K = {"static": cfg.K_static, "astatic": cfg.K_astatic}
     for c in cases:
         c["op"] = steady_state_error(c["plant"], K[c["plant"]], c["p"], c["i"], g=c["g"], g_slope=c["g_slope"],
                                      f=c["f"], f_slope=c["f_slope"])
-    run_all(cfg, cases, progress)
+    return cases
 
-    metrics: dict[str, float] = {
-        "kp_mds_static": gains[("static", "P")]["kp"],
-        "kp_mds_astatic": gains[("astatic", "P")]["kp"],
-        "pi_mds_static_kp": gains[("static", "PI")]["kp"],
-        "pi_mds_static_ki": gains[("static", "PI")]["ki"],
-        "pi_mds_astatic_kp": gains[("astatic", "PI")]["kp"],
-        "pi_mds_astatic_ki": gains[("astatic", "PI")]["ki"],
-    }
-    paper_rows = []
+
+def paper_rows(cfg: Config, cases: list[Case]) -> tuple[dict[str, float], list[dict[str, Any]]]:
+    """Metrics and table of the paper's four cases (analytic vs simulated, settling, overshoot)."""
+    metrics, rows = {}, []
     for c in (c for c in cases if c["kind"] == "paper"):
         name = _case_key(c["plant"], c["f"]) + ("_fuzzy" if c["controller"] == "fuzzy P" else "_linear")
-        metrics[f"ess_{name}"] = float(c["e_sim"])
-        metrics[f"ess_{name}_analytic"] = c["op"].error
-        metrics[f"settling_{name}"] = float(c["settling"])
-        metrics[f"overshoot_{name}"] = float(c["overshoot"])
-        lim1, lim2 = section_domains(c["plant"], K[c["plant"]], c["p"])
-        paper_rows.append({
-            "plant": c["plant"], "g": c["g"], "f": c["f"], "controller": c["controller"],
-            "K1": _small_gain(c["p"]),
-            "demand": c["op"].demand, "section": c["op"].section, "equation": c["op"].equation,
-            "domain_section1_upper": lim1, "domain_section2_upper": lim2,
-            "e_analytic": c["op"].error, "e_simulated": float(c["e_sim"]),
-            "abs_difference": abs(c["op"].error - float(c["e_sim"])),
-            "settling_time_2pct_s": float(c["settling"]), "overshoot_pct": float(c["overshoot"]),
-        })
-    metrics["paper_cases_max_abs_difference"] = max(r["abs_difference"] for r in paper_rows)
+        op, e_sim = c["op"], float(c["e_sim"])
+        metrics |= {f"ess_{name}": e_sim, f"ess_{name}_analytic": op.error,
+                    f"settling_{name}": float(c["settling"]), f"overshoot_{name}": float(c["overshoot"])}
+        lim1, lim2 = section_domains(c["plant"], cfg.K_static if c["plant"] == "static" else cfg.K_astatic, c["p"])
+        rows.append({"plant": c["plant"], "g": c["g"], "f": c["f"], "controller": c["controller"],
+                     "K1": small_gain(c["p"]), "demand": op.demand, "section": op.section, "equation": op.equation,
+                     "domain_section1_upper": lim1, "domain_section2_upper": lim2, "e_analytic": op.error,
+                     "e_simulated": e_sim, "abs_difference": abs(op.error - e_sim),
+                     "settling_time_2pct_s": float(c["settling"]), "overshoot_pct": float(c["overshoot"])})
+    metrics["paper_cases_max_abs_difference"] = max(r["abs_difference"] for r in rows)
+    return metrics, rows
 
-    fig6 = {c["controller"]: c for c in cases if c["kind"] == "fig6"}
-    for label, key in (("linear PI", "linear_pi"), ("fuzzy PI", "fuzzy_pi")):
-        metrics[f"fig6_settling_{key}"] = float(fig6[label]["settling"])
-        metrics[f"fig6_overshoot_{key}"] = float(fig6[label]["overshoot"])
-        metrics[f"fig6_ess_{key}"] = float(fig6[label]["e_sim"])
 
-    grid_rows = []
+def grid_rows(cases: list[Case]) -> tuple[dict[str, float], list[dict[str, Any]]]:
+    """Analytic vs simulated steady-state error over the grid; relative error |Δe| / max(|e_an|, g)."""
+    rows = []
     for c in (c for c in cases if c["kind"] == "grid"):
         op = c["op"]
         scale = max(abs(op.error), abs(c["g"])) if op.exists else np.nan
-        rel = abs(float(c["e_sim"]) - op.error) / scale if op.exists else np.nan
-        grid_rows.append({
-            "plant": c["plant"], "controller": c["controller"], "g": c["g"], "g_slope": c["g_slope"],
-            "f": c["f"], "f_slope": c["f_slope"], "section": op.section, "channel": op.channel,
-            "equation": op.equation, "e_analytic": op.error, "e_simulated": float(c["e_sim"]),
-            "steady_state_analytic": bool(op.exists), "steady_state_simulated": bool(c["converged"]),
-            "relative_error": rel,
-        })
-    finite = [r for r in grid_rows if r["steady_state_analytic"]]
-    none = [r for r in grid_rows if not r["steady_state_analytic"]]
-    metrics.update({
-        "grid_n_cases": len(grid_rows),
-        "grid_n_finite": len(finite),
-        "grid_n_finite_converged": sum(r["steady_state_simulated"] for r in finite),
-        "grid_max_relative_error": max(r["relative_error"] for r in finite),
-        "grid_n_no_steady_state": len(none),
-        "grid_n_no_steady_state_detected": sum(not r["steady_state_simulated"] for r in none),
-    })
-    for s in (1, 2, 3):
-        metrics[f"grid_n_section{s}"] = sum(r["section"] == s for r in finite)
+        rows.append({"plant": c["plant"], "controller": c["controller"], "g": c["g"], "g_slope": c["g_slope"],
+                     "f": c["f"], "f_slope": c["f_slope"], "section": op.section, "channel": op.channel,
+                     "equation": op.equation, "e_analytic": op.error, "e_simulated": float(c["e_sim"]),
+                     "steady_state_analytic": bool(op.exists), "steady_state_simulated": bool(c["converged"]),
+                     "relative_error": abs(float(c["e_sim"]) - op.error) / scale if op.exists else np.nan})
+    finite = [r for r in rows if r["steady_state_analytic"]]
+    none = [r for r in rows if not r["steady_state_analytic"]]
+    metrics = {"grid_n_cases": len(rows), "grid_n_finite": len(finite),
+               "grid_n_finite_converged": sum(r["steady_state_simulated"] for r in finite),
+               "grid_max_relative_error": max(r["relative_error"] for r in finite),
+               "grid_n_no_steady_state": len(none),
+               "grid_n_no_steady_state_detected": sum(not r["steady_state_simulated"] for r in none),
+               **{f"grid_n_section{s}": sum(r["section"] == s for r in finite) for s in (1, 2, 3)}}
+    return metrics, rows
+
+
+def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
+    gains = designs(cfg)
+    cases = build_cases(cfg, gains)
+    run_all(cfg, cases, progress)
+    metrics = {"kp_mds_static": gains[("static", "P")]["kp"], "kp_mds_astatic": gains[("astatic", "P")]["kp"],
+               **{f"pi_mds_{plant}_{k}": gains[(plant, "PI")][k] for plant in PLANTS for k in ("kp", "ki")}}
+    m_paper, paper = paper_rows(cfg, cases)
+    fig6 = {c["controller"]: c for c in cases if c["kind"] == "fig6"}
+    for label, key in (("linear PI", "linear_pi"), ("fuzzy PI", "fuzzy_pi")):
+        metrics |= {f"fig6_{q}_{key}": float(fig6[label][k]) for q, k in
+                    (("settling", "settling"), ("overshoot", "overshoot"), ("ess", "e_sim"))}
+    m_grid, grid = grid_rows(cases)
 
     e = jnp.linspace(-2.0, 2.0, 201)
-    mamdani, rms_to_paper = fit_mamdani_to_characteristic(cfg, fz.three_section(*cfg.fc_static), e)
+    problem, build = mamdani_fit_problem(fz.three_section(*cfg.fc_static), e)
+    fit_stage = stages.gradient_tuning(  # the last of steps + 1 evaluations is the point after `steps` updates
+        problem, steps=cfg.mamdani_fit_steps + 1, optimizer=optax.adam(0.03), mode="reverse",
+        loss_label="mean-square deviation from the paper's FC", table="mamdani_fit_history", figure="mamdani_fit")
+    mamdani = build(fit_stage.result.params)
     u_mamdani = np.asarray(jax.jit(fz.static_characteristic)(mamdani, e))
     fit = fz.fit_three_section(e, u_mamdani)
-    metrics.update({f"fig2_fit_{k}": v for k, v in zip("abcd", fit.abcd)})
-    metrics["fig2_fit_rms"] = fit.rms
-    metrics["fig2_mamdani_rms_to_paper_fc"] = rms_to_paper
+    metrics |= {**m_paper, **m_grid, **{f"fig2_fit_{k}": v for k, v in zip("abcd", fit.abcd)},
+                "fig2_fit_rms": fit.rms, "fig2_mamdani_rms_to_paper_fc": float(np.sqrt(fit_stage.result.loss))}
 
-    figures = {
-        "fig2_static_characteristic": _plot_fig2(cfg, e, u_mamdani, fit, gains),
-        "fig3_fc1_fc2_kmds": _plot_fig3(cfg, cases, gains),
-        "fig4_static_transients": _plot_transients([c for c in cases if c["kind"] == "paper" and c["plant"] == "static"],
-                                                   "Fig. 4: static plant, g = 1"),
-        "fig5_astatic_transients": _plot_transients([c for c in cases if c["kind"] == "paper" and c["plant"] == "astatic"],
-                                                     "Fig. 5: astatic plant, g = 1"),
-        "fig6_pi_astatic": _plot_fig6(cfg, fig6),
-        "steady_state_grid": _plot_grid(grid_rows),
-    }
     fuzzy_pi_p, fuzzy_pi_i = channels(cfg, gains, "astatic", "fuzzy PI")
     notes = [
         f"simulation: RK4, dt = controller period = {cfg.dt} s, horizon {cfg.t_final} s; "
@@ -382,138 +209,66 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         f"{tuple(round(float(v), 4) for v in (fuzzy_pi_p.a, fuzzy_pi_p.b, fuzzy_pi_p.c, fuzzy_pi_p.d))}, "
         f"I = {tuple(round(float(v), 4) for v in (fuzzy_pi_i.a, fuzzy_pi_i.b, fuzzy_pi_i.c, fuzzy_pi_i.d))}",
     ]
-    return StudyResult(
-        metrics=metrics,
-        tables={"paper_cases": paper_rows, "steady_state_grid": grid_rows,
-                "fig6_pi": [{"controller": k, "settling_time_2pct_s": float(v["settling"]),
-                             "overshoot_pct": float(v["overshoot"]), "e_final": float(v["e_sim"])}
-                            for k, v in fig6.items()]},
-        assumptions=ASSUMPTIONS,
-        figures=figures,
-        notes=notes,
-    )
+    tables = {"paper_cases": paper, "steady_state_grid": grid,
+              "fig6_pi": [{"controller": k, "settling_time_2pct_s": float(v["settling"]),
+                           "overshoot_pct": float(v["overshoot"]), "e_final": float(v["e_sim"])} for k, v in fig6.items()]}
+    own = stages.Stage(tables=tables, figures=paper_figures(cfg, cases, gains, e, u_mamdani, fit) | {
+        "steady_state_grid": _plot_grid(grid)})
+    return stages.merge(own, fit_stage, metrics=metrics, notes=notes)
 
 
-# ---------------------------------------------------------------------------------------------
-# Plots
+_evaluate = jax.jit(lambda char, e: char(e))  # characteristics on a grid, for plots
 
 
-def _plot_fig2(cfg, e, u_mamdani, fit, gains):
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6.5, 4.5))
-    e_np = np.asarray(e)
-    ax.plot(e_np, u_mamdani, lw=2, label="1: Mamdani FC (centroid)")
-    ax.plot(e_np, np.asarray(_evaluate(fit.params, e)), "--", lw=1.5,
-            label="2: three-section fit a={:.3f} b={:.3f} c={:.3f} d={:.3f}".format(*fit.abcd))
-    ax.plot(e_np, np.asarray(_evaluate(fz.three_section(*cfg.fc_static), e)), ":", color="k", lw=1.2,
-            label="paper's FC (0.75, 0.3, 1.2, 1)")
-    ax.plot(e_np, gains[("static", "P")]["kp"] * e_np, color="gray", lw=0.8, label="linear K_mds·e")
-    ax.set_xlabel("e")
-    ax.set_ylabel("u")
-    ax.set_ylim(-1.4, 1.4)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title("Fig. 2: static characteristic of the FC and its approximation")
-    fig.tight_layout()
-    return fig
-
-
-def _plot_fig3(cfg, cases, gains):
-    import matplotlib.pyplot as plt
-
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
-    e = np.linspace(0, 2.0, 401)
+def paper_figures(cfg: Config, cases: list[Case], gains: dict, e: Any, u_mamdani: Any, fit: Any) -> dict[str, Any]:
+    """Figs. 2–6 of the paper, as :func:`figures.line_panels`."""
+    kmds, e2 = gains[("static", "P")]["kp"], np.linspace(0, 2.0, 401)
     fc1, fc2 = fz.three_section(*cfg.fc1_static), fz.three_section(*cfg.fc_static)
-    kmds = gains[("static", "P")]["kp"]
-    ax1.plot(e, np.asarray(_evaluate(fc1, e)), label=f"FC1 (K1 = {_small_gain(fc1):.2f})")
-    ax1.plot(e, np.asarray(_evaluate(fc2, e)), label=f"FC2 (K1 = {_small_gain(fc2):.2f})")
-    ax1.plot(e, kmds * e, "k--", lw=1, label=f"K_mds = {kmds:.3g}")
-    ax1.set_xlabel("e")
-    ax1.set_ylabel("u")
-    ax1.set_ylim(0, 1.3)
-    ax1.legend()
-    ax1.grid(alpha=0.3)
-    ax1.set_title("(a) static characteristics")
-    picks = {"FC1": next(c for c in cases if c["kind"] == "fig3"),
-             "FC2": next(c for c in cases if c["kind"] == "paper" and c["plant"] == "static" and c["f"] == 0.0
-                         and c["controller"] == "fuzzy P"),
-             "K_mds": next(c for c in cases if c["kind"] == "paper" and c["plant"] == "static" and c["f"] == 0.0
-                           and c["controller"] == "linear P")}
-    for label, c in picks.items():
-        ax2.plot(c["t"], c["y"], label=f"{label}: e(∞) = {float(c['e_sim']):.4f}")
-    ax2.set_xlim(0, 3)
-    ax2.set_xlabel("t, s")
-    ax2.set_ylabel("y")
-    ax2.grid(alpha=0.3)
-    ax2.legend()
-    ax2.set_title("(b) transients, static plant, g = 1, f = 0")
-    fig.suptitle("Fig. 3 (FC1 assumed)")
-    fig.tight_layout()
-    return fig
+    fig2 = figures.line_panels([{"lines": {
+        "1: Mamdani FC (centroid)": (e, u_mamdani), "2: three-section fit a={:.3f} b={:.3f} c={:.3f} d={:.3f}".format(
+            *fit.abcd): (e, _evaluate(fit.params, e), "--"), "paper's FC (0.75, 0.3, 1.2, 1)": (e, _evaluate(fc2, e), ":"),
+        "linear K_mds·e": (e, kmds * np.asarray(e))}, "x_label": "e", "y_label": "u", "ylim": (-1.4, 1.4),
+        "title": "Fig. 2: static characteristic of the FC and its approximation"}])
+    pick = {c["controller"] if c["kind"] == "fig3" else ("FC2" if c["controller"] == "fuzzy P" else "K_mds"): c
+            for c in cases if c["kind"] == "fig3" or (c["kind"] == "paper" and c["plant"] == "static" and c["f"] == 0.0)}
+    fig3 = figures.line_panels([
+        {"lines": {f"FC1 (K1 = {small_gain(fc1):.2f})": (e2, _evaluate(fc1, e2)),
+                   f"FC2 (K1 = {small_gain(fc2):.2f})": (e2, _evaluate(fc2, e2)), f"K_mds = {kmds:.3g}": (e2, kmds * e2, "k--")},
+         "x_label": "e", "y_label": "u", "ylim": (0, 1.3), "title": "(a) static characteristics"},
+        {"lines": {f"{k}: e(∞) = {float(pick[k]['e_sim']):.4f}": (pick[k]["t"], pick[k]["y"]) for k in ("FC1", "FC2", "K_mds")},
+         "x_label": "t, s", "y_label": "y", "xlim": (0, 3), "title": "(b) transients, static plant, g = 1, f = 0"}],
+        title="Fig. 3 (FC1 assumed)")
+    out = {"fig2_static_characteristic": fig2, "fig3_fc1_fc2_kmds": fig3}
+    for plant, name, fig in (("static", "fig4_static_transients", "Fig. 4"), ("astatic", "fig5_astatic_transients", "Fig. 5")):
+        sel = [c for c in cases if c["kind"] == "paper" and c["plant"] == plant]
+        out[name] = figures.line_panels([{"lines": {
+            f"{c['controller']}: e(∞) = {float(c['e_sim']):.4f}, t_s = {float(c['settling']):.3f} s, "
+            f"σ = {float(c['overshoot']):.2f} %": (c["t"], c["y"]) for c in sel if c["f"] == f},
+            "x_label": "t, s", "y_label": "y", "xlim": (0, 3), "hline": 1.0, "title": f"f = {f}"}
+            for f in sorted({c["f"] for c in sel})], title=f"{fig}: {plant} plant, g = 1")
+    fig6 = {c["controller"]: c for c in cases if c["kind"] == "fig6"}
+    out["fig6_pi_astatic"] = figures.line_panels([
+        {"lines": {f"{k}: t_s = {float(c['settling']):.3f} s, σ = {float(c['overshoot']):.2f} %": (c["t"], c["y"])
+                   for k, c in fig6.items()}, "x_label": "t, s", "y_label": "y", "xlim": (0, 5), "hline": 1.0},
+        {"lines": {k: (c["t"], np.abs(1.0 - c["y"]) + 1e-16) for k, c in fig6.items()}, "x_label": "t, s",
+         "y_label": "|e(t)|", "xlim": (0, 8), "ylim": (1e-8, 2), "log_y": True}],
+        title=f"Fig. 6: astatic plant, PI at maximum stability vs fuzzy PI (g = 1, f = {cfg.fig6_f})")
+    return out
 
 
-def _plot_transients(cases, title):
-    import matplotlib.pyplot as plt
-
-    fs = sorted({c["f"] for c in cases})
-    fig, axes = plt.subplots(1, len(fs), figsize=(6 * len(fs), 4.5))
-    for ax, f in zip(np.atleast_1d(axes), fs):
-        for c in (c for c in cases if c["f"] == f):
-            ax.plot(c["t"], c["y"], label=f"{c['controller']}: e(∞) = {float(c['e_sim']):.4f}, "
-                    f"t_s = {float(c['settling']):.3f} s, σ = {float(c['overshoot']):.2f} %")
-        ax.axhline(1.0, color="k", lw=0.6)
-        ax.set_xlim(0, 3)
-        ax.set_xlabel("t, s")
-        ax.set_ylabel("y")
-        ax.set_title(f"f = {f}")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-    fig.suptitle(title)
-    fig.tight_layout()
-    return fig
-
-
-def _plot_fig6(cfg, fig6):
-    import matplotlib.pyplot as plt
-
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
-    for label, c in fig6.items():
-        ax1.plot(c["t"], c["y"], label=f"{label}: t_s = {float(c['settling']):.3f} s, σ = {float(c['overshoot']):.2f} %")
-        ax2.semilogy(c["t"], np.abs(1.0 - c["y"]) + 1e-16, label=label)
-    ax1.axhline(1.0, color="k", lw=0.6)
-    ax1.set_xlim(0, 5)
-    ax1.set_xlabel("t, s")
-    ax1.set_ylabel("y")
-    ax1.legend(fontsize=8)
-    ax1.grid(alpha=0.3)
-    ax2.set_xlim(0, 8)
-    ax2.set_ylim(1e-8, 2)
-    ax2.set_xlabel("t, s")
-    ax2.set_ylabel("|e(t)|")
-    ax2.legend(fontsize=8)
-    ax2.grid(alpha=0.3)
-    fig.suptitle(f"Fig. 6: astatic plant, PI at maximum stability vs fuzzy PI (g = 1, f = {cfg.fig6_f})")
-    fig.tight_layout()
-    return fig
-
-
-def _plot_grid(rows):
-    import matplotlib.pyplot as plt
-
+def _plot_grid(rows: list[dict[str, Any]]):
+    plt = figures._plt()
     fig, ax = plt.subplots(figsize=(6.5, 5))
-    markers = {"linear P": "o", "fuzzy P": "s", "linear PI": "^", "fuzzy PI": "D"}
-    for ctrl, m in markers.items():
+    for k, ctrl in enumerate(CONTROLLERS):
         sel = [r for r in rows if r["controller"] == ctrl and r["steady_state_analytic"]]
-        ax.scatter([r["e_analytic"] for r in sel], [r["e_simulated"] for r in sel], marker=m,
-                   facecolors="none", edgecolors=f"C{list(markers).index(ctrl)}", label=ctrl)
+        ax.scatter([r["e_analytic"] for r in sel], [r["e_simulated"] for r in sel], marker="os^D"[k],
+                   facecolors="none", edgecolors=f"C{k}", label=ctrl)
     lim = max(abs(r["e_analytic"]) for r in rows if r["steady_state_analytic"]) * 1.1
     ax.plot([-lim, lim], [-lim, lim], "k-", lw=0.6)
     n_none = sum(not r["steady_state_analytic"] for r in rows)
     n_det = sum((not r["steady_state_analytic"]) and (not r["steady_state_simulated"]) for r in rows)
-    ax.set_title(f"steady-state error: analytic vs simulated\n(no steady state: {n_det}/{n_none} detected)")
-    ax.set_xlabel("analytic e(∞)")
-    ax.set_ylabel("simulated e(T)")
+    ax.set(title=f"steady-state error: analytic vs simulated\n(no steady state: {n_det}/{n_none} detected)",
+           xlabel="analytic e(∞)", ylabel="simulated e(T)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -522,7 +277,11 @@ def _plot_grid(rows):
 
 STUDY = Study(
     name="fuzzy_pid_accuracy",
-    description="Fuzzy-PID paper: steady-state accuracy of fuzzy vs linear P/PI control, analytic vs simulated, Figs. 2–6",
-    config_cls=Config,
+    description="Fuzzy-PID paper: steady-state accuracy of fuzzy vs linear control, analytic vs simulated, "
+                "Figs. 2–6",
+    config=Config,
+    presets=PRESETS,
+    claims=CLAIMS,
+    assumptions=ASSUMPTIONS,
     run=run,
 )

@@ -19,7 +19,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from experiments.study import Study, StudyResult, assumption
+from experiments import figures, stages
+from experiments.runner import Claim, Study, StudyResult, assumption
 from jaxsim.core.integrators import RK4, integrate
 from jaxsim.estimation import hankel_predictor as hp
 from jaxsim.plants import ship_3dof
@@ -27,12 +28,11 @@ from jaxsim.plants import ship_3dof
 
 @dataclass(frozen=True)
 class Config:
-    quick: bool = False
     window: int = 15  # paper
     nu: int = 4  # paper
     sample_period: float = 0.05  # s, paper
     sim_dt: float = 0.01  # s, RK4 step of the vessel simulation
-    t_final: float = 150.0  # s (quick: 60 s)
+    t_final: float = 150.0  # s
     rudder_amplitude_deg: float = 15.0
     rudder_period: float = 40.0  # s
     rudder_step_deg: float = 5.0
@@ -42,10 +42,19 @@ class Config:
     rank_tol: float = 1e-8  # vessel data (not exactly low-rank: the kinematics are nonlinear)
     lti_rank_tol: float = 1e-10  # exactly low-rank LTI data
     noise_std: float = 1e-4  # m on x, y; rad on ψ
-    n_noise_runs: int = 32  # quick: 8
-    n_lti_systems: int = 60  # quick: 20
+    n_noise_runs: int = 32
+    n_lti_systems: int = 60
     seed: int = 0
 
+
+PRESETS = {"quick": dict(t_final=60.0, n_noise_runs=8, n_lti_systems=20)}
+SOURCE = "seed 000 paper 6, §6.2 (spec lines 621–623)"
+CLAIMS = [
+    Claim("pred_err_noise_free", paper=1e-4, band=(0.0, 1e-4), source=SOURCE + ": errors below the 4th decimal place",
+          note="the 3-DOF substitute vessel, noise-free"),
+    Claim("hankel_rank_vessel", paper=7.0, band=(0.0, 7.0), source=SOURCE + ": Hankel rank ≤ 7"),
+    Claim("lti_max_abs_error", paper=0.0, abs_tol=1e-8, source="closed-form y_k = C A^k x0 of random LTI systems"),
+]
 
 ASSUMPTIONS = {
     "vessel_model": assumption(
@@ -105,9 +114,7 @@ def random_lti(rng: np.random.Generator, dt: float, n_samples: int) -> tuple[np.
 
 def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     hp.validate_sizes(cfg.window, cfg.nu)
-    t_final = 60.0 if cfg.quick else cfg.t_final
-    n_noise = 8 if cfg.quick else cfg.n_noise_runs
-    n_lti = 20 if cfg.quick else cfg.n_lti_systems
+    t_final, n_noise, n_lti = cfg.t_final, cfg.n_noise_runs, cfg.n_lti_systems
     warm = cfg.window + cfg.nu + 1
     rng = np.random.default_rng(cfg.seed)
     predict = jax.jit(lambda ys: hp.predict_series(ys, cfg.window, cfg.nu, cfg.rank_tol))
@@ -164,56 +171,29 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         "prediction; the paper's '10 measurements, 0.5 s' counts rank + ν + 1 with its rank 7",
         f"noise σ = {cfg.noise_std:g}: median over {n_noise} runs of the max error {metrics['pred_err_noise_1e-4']:.2e}",
     ]
-    return StudyResult(
-        metrics=metrics,
-        tables={"random_lti": lti_rows, "null_space_choice": scan_rows,
-                "noise_runs": [{"run": i, "max_abs_error": float(v)} for i, v in enumerate(per_run_max)]},
-        assumptions=ASSUMPTIONS,
-        figures={"manoeuvre": _plot_manoeuvre(t, y, u), "prediction_errors": _plot_errors(t, warm, err, err_n[0])},
-        notes=notes,
-    )
-
-
-def _plot_manoeuvre(t, y, u):
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4))
-    axes[0].plot(y[:, 1], y[:, 0])
-    axes[0].set_xlabel("east y, m")
-    axes[0].set_ylabel("north x, m")
-    axes[0].set_title("track")
-    axes[1].plot(t, np.rad2deg(y[:, 2]))
-    axes[1].set_ylabel("heading ψ, deg")
-    axes[2].plot(t, np.rad2deg(u[:, 0]), label="rudder command, deg")
-    axes[2].plot(t, u[:, 1], label="speed command, m/s")
-    axes[2].legend()
-    for ax in axes[1:]:
-        ax.set_xlabel("t, s")
-    for ax in axes:
-        ax.grid(alpha=0.3)
-    fig.tight_layout()
-    return fig
-
-
-def _plot_errors(t, warm, err, err_noisy):
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4), sharex=True)
-    for ax, e, title in ((axes[0], err, "noise-free"), (axes[1], err_noisy, "noise σ = 1e-4 (one run)")):
-        for j, name in enumerate(("x, m", "y, m", "ψ, rad")):
-            ax.semilogy(t[warm:], np.maximum(e[:, j], 1e-16), lw=0.8, label=name)
-        ax.axhline(1e-4, color="k", ls="--", lw=0.8, label="paper: 1e-4")
-        ax.set_title(f"one-step prediction error, {title}")
-        ax.set_xlabel("t, s")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-    fig.tight_layout()
-    return fig
+    tables = {"random_lti": lti_rows, "null_space_choice": scan_rows,
+              "noise_runs": [{"run": i, "max_abs_error": float(v)} for i, v in enumerate(per_run_max)]}
+    deg = np.rad2deg
+    manoeuvre = figures.line_panels([
+        {"lines": {"track": (y[:, 1], y[:, 0])}, "x_label": "east y, m", "y_label": "north x, m", "title": "track"},
+        {"lines": {"heading": (t, deg(y[:, 2]))}, "x_label": "t, s", "y_label": "heading ψ, deg"},
+        {"lines": {"rudder command, deg": (t, deg(u[:, 0])), "speed command, m/s": (t, u[:, 1])},
+         "x_label": "t, s", "y_label": "command"}], size=(4.7, 4))
+    errors = figures.line_panels([
+        {"lines": {name: (t[warm:], np.maximum(e[:, j], 1e-16)) for j, name in enumerate(("x, m", "y, m", "ψ, rad"))},
+         "x_label": "t, s", "y_label": "|ŷ − y|", "log_y": True, "hline": 1e-4,
+         "title": f"one-step prediction error, {title} (black: paper's 1e-4)"}
+        for e, title in ((err, "noise-free"), (err_n[0], f"noise σ = {cfg.noise_std:g} (one run)"))])
+    return stages.merge(stages.Stage(tables=tables, figures={"manoeuvre": manoeuvre, "prediction_errors": errors}),
+                        metrics=metrics, notes=notes)
 
 
 STUDY = Study(
     name="ship_prediction",
     description="Paper 6: model-free Hankel-matrix one-step prediction of a manoeuvring vessel (3-DOF substitute)",
-    config_cls=Config,
+    config=Config,
+    presets=PRESETS,
+    claims=CLAIMS,
+    assumptions=ASSUMPTIONS,
     run=run,
 )

@@ -7,6 +7,8 @@
   straight from the Monte-Carlo result, flat metrics, a percentile-band figure;
 * :func:`pyswarms_search` — pyswarms' GlobalBestPSO on a problem's box (the reference swarm
   library as one more tuner of :func:`tune_and_compare`);
+* :func:`gradient_tuning` — :func:`optim.tune` on one problem: the result, the per-step history
+  table (loss, best loss, the evaluated parameters by coordinate name) and the loss-vs-step figure;
 * :func:`merge` — stages (and extra metrics/notes) into one :class:`~experiments.study.StudyResult`.
 
 Metric names: ``loss_<tuner>``, ``sims_<tuner>``, ``wall_s_<tuner>``, ``loss_at_common_sims_<tuner>``,
@@ -32,6 +34,7 @@ from experiments.study import StudyResult
 from jaxsim.core.metrics import step_info
 from optim.compare import Comparison, compare, comparison_metrics
 from optim.results import History, TuneResult
+from optim.tune import tune
 
 
 @dataclass
@@ -184,6 +187,33 @@ def pyswarms_search(problem: Any, n_particles: int, n_iters: int, *, seed: int, 
     history = History(hist, sims, np.asarray(stamps[: hist.size]) - start)
     return TuneResult(problem.space.from_search(jnp.asarray(pos)), float(best), history, int(sims[-1]), wall,
                       message="pyswarms GlobalBestPSO")
+@dataclass
+class TuningStage(Stage):
+    """:func:`gradient_tuning`'s stage; ``result``: the :class:`optim.results.TuneResult`."""
+
+    result: Any = None
+
+
+def gradient_tuning(problem: Any, *, steps: int, optimizer: Any, progress: Callable[..., Any] | None = None,
+                    loss_label: str = "loss", title: str | None = None, table: str = "tuning_history",
+                    figure: str = "tuning", **options: Any) -> TuningStage:
+    """:func:`optim.tune` of ``problem`` for ``steps`` steps of ``optimizer`` (``options`` go to
+    ``tune``: ``mode``, ``n_starts``, ...).  Table rows: ``step``, ``loss`` (the loss evaluated at
+    that step, of the start with the lowest one), ``best_loss`` and the evaluated parameters by
+    coordinate name (:meth:`ParamSpace.flat`); figure: :func:`figures.tuning_curve`."""
+    rows: list[dict[str, Any]] = []
+
+    def record(step: int, params: Any, loss: float) -> None:
+        rows.append({"step": step, "loss": loss, **problem.space.flat(params)})
+
+    res = tune(problem, optimizer=optimizer, steps=steps, callback=record, progress=progress or False, **options)
+    for row, best in zip(rows, res.history.best_loss):
+        row["best_loss"] = float(best)
+    fig = figures.tuning_curve(res.history, loss_label=loss_label,
+                               title=title or f"{problem.name}: gradient tuning ({res.n_steps} steps)")
+    return TuningStage(tables={table: rows}, figures={figure: fig}, data=res, result=res,
+                       notes=[f"tuning {problem.name}: {res.message}; {res.n_sims} simulations in "
+                              f"{res.wall_s:.1f} s (+{res.compile_s:.1f} s compile)"])
 
 
 def merge(*stages: Stage, metrics: dict[str, float] | None = None, notes: Sequence[str] = (),

@@ -5,15 +5,17 @@ import numpy as np
 import pytest
 
 import experiments.auv_formation as af
+import jaxsim.problem.auv_formation as afp
+from tests.experiments.study_cli import run_quick_study
 
 
 @pytest.fixture(scope="module")
 def paper_runs():
     cfg = af.Config()
-    plant = af.true_plant(cfg)
+    plant = afp.true_plant(cfg)
     key = jax.random.PRNGKey(0)
-    metrics_of = jax.jit(lambda loop: af.run_metrics(cfg, loop, key))
-    return cfg, {mode: {k: float(v) for k, v in metrics_of(af.build_loop(cfg, plant, mode=mode)).items()}
+    metrics_of = jax.jit(lambda loop: afp.run_metrics(cfg, loop, key))
+    return cfg, {mode: {k: float(v) for k, v in metrics_of(afp.build_loop(cfg, plant, mode=mode)).items()}
                  for mode in ("kalman", "hold")}
 
 
@@ -49,11 +51,11 @@ def test_tuning_gradient_matches_finite_differences():
     import jax.numpy as jnp
 
     cfg = dataclasses.replace(af.Config(), tune_t_final=7.0, tune_loss_start=4.0)
-    sample = jax.tree_util.tree_map(lambda a: a[0], af.draw_samples(cfg, 1, 5))
-    loss_fn = af.tuning_loss_fn(cfg)
-    theta = af.paper_tuning_params(cfg)
-    loss = jax.jit(lambda th: loss_fn(th, sample))
-    grad = jax.jit(jax.grad(lambda th: loss_fn(th, sample)))(theta)
+    sample = jax.tree_util.tree_map(lambda a: a[0], afp.draw_samples(cfg, 1, 5))
+    key = sample.pop("key")
+    theta = afp.tuning_space(cfg).init
+    loss = jax.jit(lambda th: afp.tuning_loss(cfg, th, sample, key))
+    grad = jax.jit(jax.grad(lambda th: afp.tuning_loss(cfg, th, sample, key)))(theta)
     for name, idx, eps in (("lam", 0, 1e-5), ("k_s", 1, 1e-3), ("log10_accel_psd", None, 1e-4)):
         def shifted(d):
             v = theta[name]
@@ -65,3 +67,22 @@ def test_tuning_gradient_matches_finite_differences():
         assert abs(float(g)) > 0
         np.testing.assert_allclose(float(g), float(fd), rtol=1e-4, atol=1e-9 * max(1.0, abs(float(fd))))
     assert jnp.isfinite(loss(theta))
+
+
+SHORT = {"t_final": 12.0, "ss_window": [8.0, 12.0], "t32_window": [10.0, 12.0], "mc_runs": 2, "tune_steps": 2,
+         "tune_t_final": 7.0, "tune_loss_start": 4.0, "tune_dt": 0.004}
+
+
+@pytest.mark.slow  # a 12 s study run through the CLI: a few compilations
+def test_quick_preset_with_overrides_through_the_cli(tmp_path):
+    """``--quick --set …``: the recorded config is the quick preset plus the overrides, and it is what
+    ran (horizon, Monte-Carlo runs, tuning steps); the reproduction table checks the paper's claims."""
+    res = run_quick_study("auv_formation", tmp_path, *[a for k, v in SHORT.items() for a in ("--set", f"{k}={v}")])
+    cfg, m = res["config"], res["metrics"]
+    assert res["preset"] == "quick" and cfg == {**cfg, **SHORT} and cfg["tune_samples"] == 2  # quick's value
+    assert m["mc_runs"] == 2 and m["tune_steps"] == 2 and len(res["tables"]["tuning_history"]) == 2
+    assert res["tables"]["error_bands"] == []  # its windows start at 32 s, after this 12 s run
+    rows = {r["metric"]: r for r in res["reproduction"]}
+    assert rows["err0_m"]["verdict"] == "reproduced" and rows["err0_m"]["ours"] == pytest.approx(7.8, rel=1e-9)
+    assert {r["verdict"] for r in rows.values()} <= {"reproduced", "differs"}
+    assert m["tune_train_cvar_tuned"] <= m["tune_train_cvar_paper"]  # the best evaluated point is kept

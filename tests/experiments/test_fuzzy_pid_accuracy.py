@@ -1,5 +1,5 @@
-"""The fuzzy_pid_accuracy study through the CLI (quick mode): the paper's eight steady-state
-errors, analytic vs simulated over the (g, f, K_g, K_f) grid, figures and assumptions."""
+"""The fuzzy_pid_accuracy study through the CLI (quick preset + a --set override): the paper's eight
+steady-state errors, analytic vs simulated over the (g, f, K_g, K_f) grid, figures and assumptions."""
 
 import numpy as np
 import pytest
@@ -17,7 +17,25 @@ PAPER = {  # the paper's values, spec §1.4 (linear astatic f = 0.7 is f/K_mds, 
 @pytest.fixture(scope="module")
 def results(tmp_path_factory):
     out = tmp_path_factory.mktemp("fpa")
-    return out, run_quick_study("fuzzy_pid_accuracy", out)
+    return out, run_quick_study("fuzzy_pid_accuracy", out, "--set", "mamdani_fit_steps=80")
+
+
+def test_config_is_the_quick_preset_with_the_override_and_is_what_ran(results):
+    _, res = results
+    cfg = res["config"]
+    assert res["preset"] == "quick" and cfg["mamdani_fit_steps"] == 80 and "quick" not in cfg
+    assert cfg["grid_g"] == [1.5] and cfg["grid_f"] == [0.3, 2.5]  # the quick grid
+    assert len(res["tables"]["mamdani_fit_history"]) == 81  # 80 Adam updates, the last point evaluated
+    assert len(res["tables"]["steady_state_grid"]) == 2 * 4 * 1 * 2 * 2 * 3
+
+
+def test_reproduction_table(results):
+    _, res = results
+    rows = {r["metric"]: r for r in res["reproduction"]}
+    assert set(rows) == {"kp_mds_static", "kp_mds_astatic", *PAPER}
+    for name, r in rows.items():
+        assert r["verdict"] == "reproduced" and r["ours"] == res["metrics"][name] and r["source"], name
+    assert rows["ess_static_f03_linear"]["paper"] == 0.89  # the paper's printed value (two decimals)
 
 
 def test_the_eight_paper_values_analytic_and_simulated(results):

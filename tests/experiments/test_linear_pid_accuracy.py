@@ -14,7 +14,7 @@ from tests.experiments.study_cli import run_quick_study
 @pytest.fixture(scope="module")
 def study_output(tmp_path_factory):
     out = tmp_path_factory.mktemp("lpa")
-    run_quick_study("linear_pid_accuracy", out)
+    run_quick_study("linear_pid_accuracy", out, "--set", "t_final=12")
     return out
 
 
@@ -22,7 +22,11 @@ def test_results_json_has_the_contracted_keys(study_output):
     res = json.loads((study_output / "results.json").read_text())
     assert set(res) >= {"study", "config", "assumptions", "metrics", "tables"}
     assert res["study"] == "linear_pid_accuracy"
-    assert res["config"]["quick"] is True
+    # the quick preset (t_final 10 s) with --set t_final=12 on top: recorded, and what ran
+    assert res["preset"] == "quick" and res["config"]["t_final"] == 12.0 and "quick" not in res["config"]
+    assert any("horizon 12.0 s" in note for note in res["notes"])
+    rows = {r["metric"]: r for r in res["reproduction"]}
+    assert {r["verdict"] for r in rows.values()} == {"reproduced"} and rows["kp_mds_static"]["paper"] == 0.4
     for key in ("g_slope", "f_slope", "derivative_filter", "pi_pd_gains"):
         assert key in res["assumptions"] and res["assumptions"][key]["why"]
     assert (study_output / "steady_state_errors.csv").exists()
@@ -71,7 +75,7 @@ def test_config_overrides_convert_types():
     from experiments.config_overrides import apply_overrides
     from experiments.linear_pid_accuracy import Config
 
-    cfg = apply_overrides(Config(), ["t_final=12", "quick=true", "g_slope=0.25"])
-    assert cfg.t_final == 12.0 and cfg.quick is True and cfg.g_slope == 0.25
+    cfg = apply_overrides(Config(), ["t_final=12", "drift_window=2", "g_slope=0.25"])
+    assert cfg.t_final == 12.0 and cfg.drift_window == 2.0 and cfg.g_slope == 0.25
     with pytest.raises(ValueError, match="t_final"):
         apply_overrides(Config(), ["t_final=abc"])

@@ -9,12 +9,8 @@ import numpy as np
 import pytest
 
 import jaxsim.montecarlo as mc
-from experiments.vessel_tracking import (
-    Config,
-    loss_space,
-    phases,
-    simulate,
-)
+from experiments.vessel_tracking import Config
+from jaxsim.problem.vessel_tracking import loss_space, phases, simulate
 from jaxsim.estimation.track_loss import miss_distances, track_lost
 from jaxsim.estimation.window_selector import fixed_window, predicted_plots, select_estimates, window_bank_filter
 from tests.experiments.study_cli import run_quick_study
@@ -23,7 +19,7 @@ from tests.experiments.study_cli import run_quick_study
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp("vessel_tracking")
-    res = run_quick_study("vessel_tracking", out)
+    res = run_quick_study("vessel_tracking", out, "--set", "runs=500", "--set", "tune_steps=10")
     for fig in ("error_vs_time", "window_and_sigma", "track_loss_vs_gate", "tuning"):
         assert (out / f"{fig}.png").stat().st_size > 0
     return res
@@ -52,11 +48,30 @@ def test_quick_study_reproduces_the_paper_within_30_percent(quick):
     assert f"σ̂ = {m['sigma_hat_final_m']:.1f} m" in note
 
 
+def test_config_is_the_quick_preset_with_the_overrides_and_is_what_ran(quick):
+    cfg, m = quick["config"], quick["metrics"]
+    assert quick["preset"] == "quick" and "quick" not in cfg
+    assert cfg["runs"] == 500 == m["loss_runs"] and {r["runs"] for r in quick["tables"]["track_loss"]} == {500}
+    assert cfg["tune_steps"] == 10 == len(quick["tables"]["tuning_history"]) == quick["tables"]["tuning"][0]["steps"]
+    assert cfg["envelope_runs"] == 300 == m["envelope_runs_per_speed"] and "sensitivity" not in quick["tables"]
+
+
+def test_reproduction_table_is_the_envelope_against_the_paper(quick):
+    rows = {r["metric"]: r for r in quick["reproduction"]}
+    envelope = {r["metric"]: r for r in quick["tables"]["envelope"]}
+    assert set(rows) == set(envelope) and len(rows) == 14
+    for name, r in rows.items():
+        assert r["ours"] == envelope[name]["mc_mean"] == quick["metrics"][name]
+        assert (r["verdict"] == "reproduced") == envelope[name]["within_30pct"], name
+    assert rows["max_err_turn_10ms_m"]["paper"] == 22.0 and rows["window_turn_20ms"]["tolerance"] == "band [2.1, 5.2]"
+    assert quick["metrics"]["envelope_within_30pct"] == sum(r["verdict"] == "reproduced" for r in rows.values())
+
+
 def test_quick_study_track_loss_metrics_and_intervals(quick):
     m = quick["metrics"]
     for name in ("fuzzy", "fuzzy_tuned", "imm", "window5", "window3", "window10", "kalman_cv"):
         p, lo, hi = m[f"p_loss_{name}"], m[f"p_loss_{name}_wilson_low"], m[f"p_loss_{name}_wilson_high"]
-        assert 0.0 <= lo <= p <= hi <= 1.0 and hi - lo < 0.1  # 1,000 runs: half-width ≤ 3.1 %
+        assert 0.0 <= lo <= p <= hi <= 1.0 and hi - lo < 0.1  # 500 runs: half-width ≤ 4.4 %
     assert {"rmse_straight_m", "max_err_turn_10ms_m", "max_err_turn_20ms_m"} <= set(m)
     # a 10-scan window cannot follow the turn at 50 m; the IMM's turn model can
     assert m["p_loss_window10"] > 0.5 > m["p_loss_imm"] + 0.3
@@ -75,7 +90,7 @@ def _line_prediction(last, dt):
 
 
 def test_track_loss_monte_carlo_equals_a_direct_loop():
-    cfg = dataclasses.replace(Config(quick=True), gates=(20.0, 30.0, 45.0))
+    cfg = dataclasses.replace(Config(), gates=(20.0, 30.0, 45.0))
     gates = np.asarray(cfg.gates)
 
     def fn(key, p):
