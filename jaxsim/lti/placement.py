@@ -11,6 +11,8 @@ eigenvector matrix ``X`` better conditioned — the closed-loop poles less sensi
 keep conjugate eigenvectors.  Then ``A − B K = X Λ X⁻¹`` gives ``K = Z⁻¹ U₀ᵀ (A − X Λ X⁻¹)``.  With
 one input ``K`` is unique (SciPy's ``place_poles``, the oracle, gives the same); with several it
 depends on the method — SciPy defaults to Yang–Tits, so the gains differ while the poles agree.
+With as many inputs as states (``B`` invertible) the eigenvectors are free, and the orthonormal ones
+KNV strives for are taken directly: ``A − B K`` is the real normal matrix with the requested poles.
 
 Derivatives (``custom_jvp``): ``K`` is a smooth function of ``(A, B, poles)`` once the *parameter
 vectors* ``g_j = K x_j`` are fixed, through ``x_j = (A − λ_j I)⁻¹ B g_j`` and ``K = G X⁻¹``; the
@@ -121,9 +123,13 @@ def _knv0(a: jax.Array, b: jax.Array, p: jax.Array) -> tuple[jax.Array, jax.Arra
         x = x.at[:, j].set(xj)
         return jnp.where(is_real[j], x, x.at[:, partner[j]].set(jnp.conj(xj)))
 
+    # one vector from each S_j (conjugates for the lower-half poles); a pole repeated r ≤ m times has
+    # the same S_j each time, so its copies start from different basis vectors of it (else X is singular)
+    same = jnp.abs(p[:, None] - p[None, :]) <= 1e-10 * (1.0 + jnp.abs(p[:, None]))
+    column = jnp.sum(jnp.tril(same, -1) & ~is_lower[None, :], axis=1) % m
     x = jnp.zeros((n, n), p.dtype)
-    for j in range(n):  # one vector from each S_j (conjugates for the lower-half poles)
-        x = jnp.where(is_lower[j], x, settle(x, j, s[j][:, 0]))
+    for j in range(n):
+        x = jnp.where(is_lower[j], x, settle(x, j, s[j][:, column[j]]))
 
     def update(j, x):
         y = jnp.linalg.inv(x).conj().T[:, j]  # orthogonal to every other eigenvector
@@ -181,7 +187,27 @@ def place(A: Any, B: Any, p: Any) -> jax.Array:  # noqa: N803
         if mult > m:
             raise ValueError(f"p: a pole repeated {mult} times cannot be placed with rank(B) = {m} "
                              "(use acker for repeated poles of a single-input system)")
+    if b.shape[1] == a.shape[0]:
+        return _place_square(a, b, poles)
     return _place(a, b, poles)
+
+
+def _normal_matrix(p: jax.Array) -> jax.Array:
+    """A real normal matrix with eigenvalues ``p`` (conjugate pairs): ``X diag(p) Xᴴ`` with the unitary
+    ``X`` whose column is ``e_j`` for a real pole and ``(e_j ± i e_k)/√2`` for a pair ``(j, k)``."""
+    n = p.shape[0]
+    partner = _partners(p)
+    eye = jnp.eye(n, dtype=p.dtype)
+    mate = eye[:, partner]
+    pair = jnp.where(p.imag > 0, eye + 1j * mate, mate - 1j * eye) / jnp.sqrt(2.0)
+    x = jnp.where(p.imag == 0, eye, pair)
+    return jnp.real(x @ jnp.diag(p) @ x.conj().T)
+
+
+def _place_square(a: jax.Array, b: jax.Array, p: jax.Array) -> jax.Array:
+    """``m = n`` (invertible ``B``): every closed loop is reachable, and KNV's best-conditioned one has
+    orthonormal eigenvectors — the normal matrix of :func:`_normal_matrix`: ``K = B⁻¹(A − M)``."""
+    return jnp.linalg.solve(b, a - _normal_matrix(p))
 
 
 def acker(A: Any, B: Any, poles: Any) -> jax.Array:  # noqa: N803
