@@ -22,7 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxsim.core.validation import is_concrete
-from jaxsim.lti.statespace import as_state_space
+from jaxsim.lti.statespace import StateSpace, as_state_space
 
 MARKOV_RTOL = 1e-10
 """A Markov-parameter row below this fraction of the output's largest (scaled) row is zero."""
@@ -85,7 +85,7 @@ def _relative_degrees(a: jax.Array, b: jax.Array, c: jax.Array, d: jax.Array):
     return r, delta, phi, jnp.all(jnp.any(significant, axis=0))
 
 
-def zero_candidates(s: StateSpace) -> tuple[jax.Array, jax.Array, jax.Array, jax.Array]:
+def zero_candidates(s: StateSpace) -> tuple[jax.Array, jax.Array, jax.Array, jax.Array, jax.Array]:
     """``(A_z, eigenvalues of stop_gradient(A_z), keep, nonzero_rows, delta)`` for a square system
     with states: ``keep`` marks the transmission zeros (the other ``Σrᵢ`` are structural)."""
     n = s.n_states
