@@ -218,21 +218,19 @@ def _margins_reference(loop):
 
 
 def _loop(seed: int) -> ct.TransferFunction:
-    """A loop ``k·C·P``: a PI (even seeds) or lead controller ``C`` and a stable plant ``P`` of order 2
-    (seeds 0, 1; no phase crossover) or 3 (seeds ≥ 2; finite gain margins), random (seeded) coefficients.  A transfer function: python-control's
+    """A fourth-order loop ``k·C·P``: a PI (even seeds) or lead controller ``C`` and a stable third-order
+    plant ``P`` with random (seeded) coefficients (one size: one compilation of each margin function).  A transfer function: python-control's
     polynomial method on it is exact, while its ``ss → tf`` conversion leaves rounding-level leading
     coefficients that it reports as phase crossovers near 10⁸ rad/s."""
     rng = np.random.default_rng(seed)
     wn, zeta = rng.uniform(0.5, 3.0), rng.uniform(0.2, 1.0)
-    plant = ct.tf([wn**2], [1.0, 2 * zeta * wn, wn**2])
-    if seed >= 2:
-        plant = plant * ct.tf([1.0], [rng.uniform(0.2, 2.0), 1.0])
+    plant = ct.tf([wn**2], [1.0, 2 * zeta * wn, wn**2]) * ct.tf([1.0], [rng.uniform(0.2, 2.0), 1.0])
     z = rng.uniform(0.1, 2.0)
     ctrl = ct.tf([1.0, z], [1.0, 0.0]) if seed % 2 == 0 else ct.tf([1.0, z], [1.0, z * rng.uniform(3.0, 20.0)])
     return 10 ** rng.uniform(-0.5, 1.0) * ctrl * plant
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2, 3, 4, 5])
+@pytest.mark.parametrize("seed", [0, 1, 2, 3, 4])
 def test_margins(seed):
     """Gain margin, phase margin, the crossover frequencies, the stability margin and the delay
     margin at python-control's definitions, on random third-order loops (PI and lead)."""
@@ -242,22 +240,21 @@ def test_margins(seed):
     ours = lt.stability_margins(mine)
     for got, want in zip(ours, (gm, pm, sm, wpc, wgc, wms)):
         assert rel_diff(got, want) < TOL
-    assert seed < 2 or np.isfinite(gm)
+    assert np.isfinite(gm) or np.isfinite(pm)
     m = lt.margin(mine)
     assert rel_diff(jc.margin(mine), ct.margin(loop)) < TOL
     assert rel_diff(m.dm, dm) < TOL
 
 
 def test_margins_of_a_known_loop():
-    """``L = 4/(s + 1)³``: phase crossover at ``√3`` rad/s with ``GM = 8/4 = 2``; the gain crossover
-    where ``(ω² + 1)^{3/2} = 4``."""
-    loop = ct.tf([4.0], [1.0, 3.0, 3.0, 1.0])
-    wgc = np.sqrt(4.0 ** (2 / 3) - 1.0)
-    pm = 180.0 - 3 * np.degrees(np.arctan(wgc))
-    gm, pm_ours, wcg, wcp, dm = lt.margin(lt.tf([4.0], [1.0, 3.0, 3.0, 1.0]))
-    np.testing.assert_allclose([gm, wcg, pm_ours, wcp, dm], [2.0, np.sqrt(3.0), pm, wgc, np.radians(pm) / wgc],
-                               rtol=1e-12)
-    assert rel_diff(jc.margin(lt.tf([4.0], [1.0, 3.0, 3.0, 1.0])), ct.margin(loop)) < TOL
+    """``L = 2/(s + 1)⁴``: phase crossover at 1 rad/s (``4·atan ω = 180°``) with ``GM = 4/2 = 2``; the
+    gain crossover where ``(ω² + 1)² = 2``."""
+    den = [1.0, 4.0, 6.0, 4.0, 1.0]
+    wgc = np.sqrt(np.sqrt(2.0) - 1.0)
+    pm = 180.0 - 4 * np.degrees(np.arctan(wgc))
+    gm, pm_ours, wcg, wcp, dm = lt.margin(lt.tf([2.0], den))
+    np.testing.assert_allclose([gm, wcg, pm_ours, wcp, dm], [2.0, 1.0, pm, wgc, np.radians(pm) / wgc], rtol=1e-12)
+    assert rel_diff(jc.margin(lt.tf([2.0], den)), ct.margin(ct.tf([2.0], den))) < TOL
 
 
 def test_discrete_margins():
