@@ -21,7 +21,8 @@ class Linearization(NamedTuple):
 
 
 def linearize(plant: Plant, x0: jax.Array, u0: jax.Array, t: float = 0.0) -> Linearization:
-    """Jacobians of ``dynamics`` and ``output`` at ``(x0, u0, t)`` (``x0 (n,)``, ``u0 (m,)``)."""
+    """Jacobians of ``dynamics`` and ``output`` at ``(x0, u0, t)`` (``x0 (n,)``, ``u0 (m,)``); ``D`` is
+    the Jacobian of the plant's ``feedthrough`` term (zero without one)."""
     x0 = jnp.asarray(x0, dtype=float)
     u0 = jnp.asarray(u0, dtype=float)
     if x0.shape != (plant.n_states,):
@@ -32,8 +33,11 @@ def linearize(plant: Plant, x0: jax.Array, u0: jax.Array, t: float = 0.0) -> Lin
     check_finite("u0", u0)
     tt = jnp.asarray(t, dtype=x0.dtype)
     a, b = jax.jacfwd(plant.f, argnums=(0, 1))(x0, u0, tt)
-    c = jax.jacfwd(plant.h)(x0)
-    d = jnp.zeros((c.shape[0], u0.shape[0]), dtype=x0.dtype)
+    c = jax.jacfwd(plant.h)(x0, u0)
+    if plant.feedthrough is None:
+        d = jnp.zeros((c.shape[0], u0.shape[0]), dtype=x0.dtype)
+    else:
+        d = jax.jacfwd(plant.h, argnums=1)(x0, u0)
     return Linearization(a, b, c, d)
 
 

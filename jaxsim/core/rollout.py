@@ -3,7 +3,11 @@
 At tick ``k`` (time ``t_k = k·Ts``, ``Ts`` the controller period):
 
 1. the sensor delivers a new measurement if ``k`` is a multiple of ``sensor_period/Ts``
-   (otherwise the last one is held); noise keys are ``fold_in(key, k)``;
+   (otherwise the last one is held); noise keys are ``fold_in(key, k)``.  For a plant with a
+   feedthrough term (``y = output(x) + D u``) the sampler reads ``y_k = output(x_k) + D u_{k−1}``:
+   the value just before the new ``u_k`` is applied, with the input held over the previous period
+   (zero before ``t = 0``).  This is what a sampler wired to a real plant sees, and it avoids the
+   algebraic loop ``y_k → u_k → y_k``;
 2. the estimator, if any, updates with that measurement — selected by a mask, not a Python
    branch — and the controller sees ``estimator.read(...)``; without an estimator it sees the
    held measurement;
@@ -106,7 +110,8 @@ class Timing:
 class Trajectory(NamedTuple):
     """Recorded rollout; leading axis = saved ticks ``N`` (``n_ticks / save_every``).
 
-    t: ``(N,)`` tick times; x: ``(N, n)`` plant state; y: ``(N, p)`` true output; y_meas: ``(N, p)``
+    t: ``(N,)`` tick times; x: ``(N, n)`` plant state; y: ``(N, p)`` true output (with a
+    feedthrough term, with the input held over the previous period, as the sensor sees it); y_meas: ``(N, p)``
     measurement held at the tick; measured: ``(N,)`` whether a new measurement arrived at the tick;
     u: ``(N, m)`` controller output; r: ``(N, k)`` reference; d: ``(N, q)`` disturbance at the tick;
     x_hat: what the estimator gave the controller (``None`` leaves when there is no estimator);
@@ -145,6 +150,7 @@ class _Carry(NamedTuple):
     y_held: jax.Array
     ctrl: Any
     est: Any
+    u_prev: Any = None  # (m,) input held over the last period; None for a plant without feedthrough
 
 
 def hold_input(
@@ -175,11 +181,15 @@ def hold_input(
 
 
 def _check_plant(plant: Plant, x0: jax.Array, t0: jax.Array) -> None:
-    """``output`` must return ``(n_outputs,)`` and ``dynamics`` ``(n_states,)`` (traced, not run)."""
+    """``output`` and ``feedthrough`` must return ``(n_outputs,)`` and ``dynamics`` ``(n_states,)``
+    (traced, not run)."""
     label = f"plant {plant.name!r}"
     check_returns_shape(f"{label}: output(params, x)", plant.output, plant.params, x0,
                         shape=(plant.n_outputs,))
     u0 = jnp.zeros(plant.n_inputs, x0.dtype)
+    if plant.feedthrough is not None:
+        check_returns_shape(f"{label}: feedthrough(params, u)", plant.feedthrough, plant.params, u0,
+                            shape=(plant.n_outputs,))
     check_returns_shape(f"{label}: dynamics(params, x, u, t)", plant.dynamics, plant.params, x0, u0, t0,
                         shape=(plant.n_states,))
 
@@ -224,8 +234,8 @@ def _check_input_shapes(loop: ClosedLoop, u: jax.ShapeDtypeStruct, r0: jax.Array
 def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | None, solver: Solver):
     """Validate, then return ``(tick, carry0, n_ticks)`` with ``tick(carry) -> (carry, Tick)``.
 
-    Checked once here, on concrete and traced loops alike: ``x0`` shape, the plant's ``output`` and
-    ``dynamics`` shapes, the controller output shape (blaming the reference when its size differs
+    Checked once here, on concrete and traced loops alike: ``x0`` shape, the plant's ``output``,
+    ``feedthrough`` (if any) and ``dynamics`` shapes, the controller output shape (blaming the reference when its size differs
     from the plant's outputs) and the disturbed plant input.  On concrete values only: ``x0`` and the
     signal parameters finite (:func:`~jaxsim.core.signals.check_signal`); traced NaN propagates.
     """
@@ -249,9 +259,11 @@ def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | N
     plant, ctrl, est = loop.plant, loop.controller, loop.estimator
     _check_plant(plant, x0, t0)
     _check_step_signature(ctrl)
+    # the input held over the previous period, read by a feedthrough term (zero before t = 0)
+    u_prev0 = None if plant.feedthrough is None else jnp.zeros(plant.n_inputs, dtype)
 
-    def measure(x: jax.Array, t: jax.Array, k: jax.Array) -> jax.Array:
-        y = plant.h(x)
+    def measure(x: jax.Array, t: jax.Array, k: jax.Array, u_prev: Any) -> jax.Array:
+        y = plant.h(x, u_prev)
         if loop.sensor is None:
             return y
         return loop.sensor.measure(loop.sensor.params, jax.random.fold_in(key, k), y, t)
@@ -262,7 +274,7 @@ def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | N
     def tick(c: _Carry) -> tuple[_Carry, Tick]:
         t = c.k * ts
         arrived = (c.k % sensor_every) == 0
-        y_new = measure(c.x, t, c.k)
+        y_new = measure(c.x, t, c.k, c.u_prev)
         y_held = jnp.where(arrived, y_new, c.y_held)
         r = loop.reference(t)
         if est is None:
@@ -275,11 +287,12 @@ def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | N
         if est is not None:
             est_state = est.predict(est.params, est_state, u, ts)
         x_next = advance_plant(c.x, u, t)
-        rec = Tick(t, c.x, plant.h(c.x), y_held, arrived, u, r, loop.disturbance(t),
+        rec = Tick(t, c.x, plant.h(c.x, c.u_prev), y_held, arrived, u, r, loop.disturbance(t),
                    None if est is None else seen)
-        return _Carry(c.k + 1, x_next, y_held, ctrl_state, est_state), rec
+        u_held = None if c.u_prev is None else jnp.asarray(u, dtype)
+        return _Carry(c.k + 1, x_next, y_held, ctrl_state, est_state, u_held), rec
 
-    y0 = measure(x0, t0, jnp.asarray(0))
+    y0 = measure(x0, t0, jnp.asarray(0), u_prev0)
     r0 = loop.reference(t0)
     carry = _Carry(
         k=jnp.asarray(0),
@@ -287,6 +300,7 @@ def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | N
         y_held=y0,
         ctrl=ctrl.init(ctrl.params, r0, y0),
         est=None if est is None else est.init(est.params, y0),
+        u_prev=u_prev0,
     )
     seen0 = y0 if est is None else est.read(est.params, carry.est)
     u0 = jax.eval_shape(lambda c: ctrl.step(ctrl.params, c, r0, seen0, ts, t0)[1], carry.ctrl)
@@ -312,8 +326,8 @@ def simulate(
 
     Raises:
         ValueError: before anything runs, naming the culprit: ``t_final/dt`` above
-            :data:`MAX_STEPS`; ``x0`` not ``(n_states,)``; the plant's ``output``/``dynamics`` not
-            returning ``(n_outputs,)``/``(n_states,)``; a ``reference`` whose size makes the
+            :data:`MAX_STEPS`; ``x0`` not ``(n_states,)``; the plant's ``output``/``feedthrough``/``dynamics``
+            not returning ``(n_outputs,)``/``(n_outputs,)``/``(n_states,)``; a ``reference`` whose size makes the
             controller's ``u`` differ from ``(n_inputs,)`` (or such a controller); a
             ``disturbance`` that changes the plant input's shape.  These shape checks hold under
             ``jit`` too.  On concrete values also: a non-finite ``x0`` or signal parameter

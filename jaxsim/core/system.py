@@ -11,7 +11,9 @@ modules build these bundles from their own ``Params`` dataclass and functions, e
 Signatures (``x`` plant state ``(n,)``, ``u`` plant input ``(m,)``, ``y`` output ``(p,)``,
 ``r`` reference ``(k,)``, ``t`` time, ``dt`` step or period in the same unit):
 
-* plant: ``dynamics(params, x, u, t) -> ẋ``, ``output(params, x) -> y``;
+* plant: ``dynamics(params, x, u, t) -> ẋ``, ``output(params, x) -> y``, and, for a plant with
+  direct feedthrough (a biproper transfer function, ``D ≠ 0``), ``feedthrough(params, u) -> D u``
+  added to the output;
 * controller: ``init(params, r0, y0) -> state``, ``step(params, state, r, y, dt, t) -> (state, u)``
   (``t`` the tick time, see :class:`Controller`);
 * sensor: ``measure(params, key, y, t) -> y_meas``;
@@ -33,7 +35,14 @@ from jaxsim.core.validation import is_concrete
 
 @pytree_dataclass
 class Plant:
-    """A plant: parameters plus ``dynamics`` and ``output`` functions."""
+    """A plant: parameters plus ``dynamics`` and ``output`` functions.
+
+    ``feedthrough`` (optional, static like the other functions) adds a direct input-to-output term:
+    ``y = output(params, x) + feedthrough(params, u)`` — ``D u`` for an LTI plant built by
+    :func:`jaxsim.lti.ss` / ``tf`` / ``zpk``.  Without it (the default) ``y = output(params, x)``.
+    In a closed loop the sampler reads ``y_k`` with the input held over the previous period
+    (see :mod:`jaxsim.core.rollout`), so a feedthrough creates no algebraic loop.
+    """
 
     params: Any
     dynamics: Callable[[Any, jax.Array, jax.Array, jax.Array], jax.Array] = static_field()
@@ -42,14 +51,24 @@ class Plant:
     n_inputs: int = static_field()
     n_outputs: int = static_field()
     name: str = static_field(default="plant")
+    feedthrough: Callable[[Any, jax.Array], jax.Array] | None = static_field(default=None)
 
     def f(self, x: jax.Array, u: jax.Array, t: jax.Array) -> jax.Array:
         """``ẋ = dynamics(params, x, u, t)``."""
         return self.dynamics(self.params, x, u, t)
 
-    def h(self, x: jax.Array) -> jax.Array:
-        """``y = output(params, x)``."""
-        return self.output(self.params, x)
+    def h(self, x: jax.Array, u: jax.Array | None = None) -> jax.Array:
+        """``y = output(params, x)``, plus ``feedthrough(params, u)`` for a plant that has one.
+
+        ``u`` ``(m,)`` is ignored by a plant without feedthrough and required by one with it
+        (``ValueError`` otherwise: dropping ``D u`` silently would give a wrong output).
+        """
+        y = self.output(self.params, x)
+        if self.feedthrough is None:
+            return y
+        if u is None:
+            raise ValueError(f"u: plant {self.name!r} has a feedthrough term, so h(x, u) needs the input u")
+        return y + self.feedthrough(self.params, u)
 
 
 @pytree_dataclass
