@@ -60,49 +60,83 @@ PRESETS = {"quick": dict(mc_runs=4, tune_samples=2, tune_holdout=2, tune_steps=2
 SOURCE = "seed 002, study 1, Fig. 4 (spec 002.4, exact leader pose)"
 CLAIMS = [
     Claim("err0_m", paper=7.8, rel_tol=1e-9, source=SOURCE + ": 7.8 m at t = 4 s (3 + 1.2·4)"),
-    Claim("t_to_0p2m_s", paper=28.0, band=(0.0, 28.0), source=SOURCE + ": x_FR error 0.2 m by t = 28 s",
-          note="ours ≈ 29 s (read from the paper's figure)"),
-    *(Claim(f"ss_err_{ax}_m", paper=v, band=(0.0, v), source=SOURCE + ": steady-state deviation")
-      for ax, v in (("x", 0.02), ("y", 0.002), ("z", 0.01))),
-    Claim("rel_vel_x_min_mps", paper=-1.1, rel_tol=0.2, source=SOURCE + ": relative velocity +1.2 → −1.1 m/s",
-          note="read from a figure"),
+    Claim(
+        "t_to_0p2m_s",
+        paper=28.0,
+        band=(0.0, 28.0),
+        source=SOURCE + ": x_FR error 0.2 m by t = 28 s",
+        note="ours ≈ 29 s (read from the paper's figure)",
+    ),
+    *(
+        Claim(f"ss_err_{ax}_m", paper=v, band=(0.0, v), source=SOURCE + ": steady-state deviation")
+        for ax, v in (("x", 0.02), ("y", 0.002), ("z", 0.01))
+    ),
+    Claim(
+        "rel_vel_x_min_mps",
+        paper=-1.1,
+        rel_tol=0.2,
+        source=SOURCE + ": relative velocity +1.2 → −1.1 m/s",
+        note="read from a figure",
+    ),
 ]
 
 ASSUMPTIONS = {
-    "frames": assumption("NED (z down), zyx Euler angles, Fossen's C(ν) from M",
-                         "the paper cites Fossen [25] without writing the matrices out"),
-    "deviation_sign": assumption("true = nominal + Δ (M_Δ added to the added-mass block)",
-                                 "the paper says the parameters 'differ by' Δ without a sign"),
-    "weight": assumption("W = B = 170 kg · 9.81 m/s², CG 0.01 m below CB",
-                         "'zero buoyancy' and the 0.01 m offset are printed; which mass gives W is not"),
-    "estimator_start": assumption(0.0, "the camera sees the leader from t = 0; starting the zero-filled "
-                                  "window with the follower (t = 4 s) makes the quartic fit report "
-                                  "~20 m/s and the follower swing at ±11 m/s, unlike the paper's "
-                                  "+1.2 → −1.1 m/s (see table startup_variants)"),
-    "window_fill": assumption("zeros in FR (the target at the follower's own position)",
-                              "paper: 'the array Ω is filled with zeros' before the start"),
-    "attitude_reference": assumption("roll 0, pitch and yaw along the target point's velocity, weighted "
-                                     "by a smoothstep of its horizontal speed (0 below 0.2, 1 above 0.5 m/s)",
-                                     "the paper's rule 'near the target point' lost its symbol; pointing at "
-                                     "the target point is singular there, and the course of a slow target "
-                                     "point (while the window fills, under camera noise) is ill-defined"),
-    "switch": assumption("exact sign for the reproduction; tanh(s/0.05) while tuning",
-                         "the paper says 'variable structure' and 'sliding mode' without a formula"),
-    "kalman_noise": assumption({"accel_psd_m2_s3": 1e-3, "meas_std_m": 0.01, "p0": (1.0, 1.0)},
-                               "the paper gives no P_p(0), Q_p, R_p; R is the fit's covariance for "
-                               "white camera noise meas_std, Q a white-acceleration model"),
-    "camera_noise": assumption({"pos_std_m": 0.01, "yaw_std_deg": 0.2},
-                               "pose noise (no intrinsics or beacon layout in the paper); ~1 cm and "
-                               "0.2° are typical of LM-PnP at 5–10 m; the reproduction uses the exact "
-                               "pose like the paper's study 1"),
+    "frames": assumption(
+        "NED (z down), zyx Euler angles, Fossen's C(ν) from M",
+        "the paper cites Fossen [25] without writing the matrices out",
+    ),
+    "deviation_sign": assumption(
+        "true = nominal + Δ (M_Δ added to the added-mass block)",
+        "the paper says the parameters 'differ by' Δ without a sign",
+    ),
+    "weight": assumption(
+        "W = B = 170 kg · 9.81 m/s², CG 0.01 m below CB",
+        "'zero buoyancy' and the 0.01 m offset are printed; which mass gives W is not",
+    ),
+    "estimator_start": assumption(
+        0.0,
+        "the camera sees the leader from t = 0; starting the zero-filled "
+        "window with the follower (t = 4 s) makes the quartic fit report "
+        "~20 m/s and the follower swing at ±11 m/s, unlike the paper's "
+        "+1.2 → −1.1 m/s (see table startup_variants)",
+    ),
+    "window_fill": assumption(
+        "zeros in FR (the target at the follower's own position)",
+        "paper: 'the array Ω is filled with zeros' before the start",
+    ),
+    "attitude_reference": assumption(
+        "roll 0, pitch and yaw along the target point's velocity, weighted "
+        "by a smoothstep of its horizontal speed (0 below 0.2, 1 above 0.5 m/s)",
+        "the paper's rule 'near the target point' lost its symbol; pointing at "
+        "the target point is singular there, and the course of a slow target "
+        "point (while the window fills, under camera noise) is ill-defined",
+    ),
+    "switch": assumption(
+        "exact sign for the reproduction; tanh(s/0.05) while tuning",
+        "the paper says 'variable structure' and 'sliding mode' without a formula",
+    ),
+    "kalman_noise": assumption(
+        {"accel_psd_m2_s3": 1e-3, "meas_std_m": 0.01, "p0": (1.0, 1.0)},
+        "the paper gives no P_p(0), Q_p, R_p; R is the fit's covariance for "
+        "white camera noise meas_std, Q a white-acceleration model",
+    ),
+    "camera_noise": assumption(
+        {"pos_std_m": 0.01, "yaw_std_deg": 0.2},
+        "pose noise (no intrinsics or beacon layout in the paper); ~1 cm and "
+        "0.2° are typical of LM-PnP at 5–10 m; the reproduction uses the exact "
+        "pose like the paper's study 1",
+    ),
     "t_final": assumption(100.0, "the figure's time axis is not readable; 100 s covers both transients"),
-    "ss_window": assumption((60.0, 100.0), "after the t = 32 s transient has decayed below the bands "
-                            "(Λ = 0.2 gives a 5 s time constant); earlier windows in table error_bands"),
-    "t_to_0p2m": assumption("first time ‖e‖ ≤ 0.2 m after the start",
-                            "the paper: 'reduced to 0.2 m by t = 28 s'"),
-    "tuning_loss": assumption("mean ‖e‖² + ρ·mean (τ/100 N)² over [20, 46] s, ρ = 1e-3, CVaR₀.₇₅",
-                              "formation keeping through the manoeuvre with noise and deviations; "
-                              "no criterion in the paper"),
+    "ss_window": assumption(
+        (60.0, 100.0),
+        "after the t = 32 s transient has decayed below the bands "
+        "(Λ = 0.2 gives a 5 s time constant); earlier windows in table error_bands",
+    ),
+    "t_to_0p2m": assumption("first time ‖e‖ ≤ 0.2 m after the start", "the paper: 'reduced to 0.2 m by t = 28 s'"),
+    "tuning_loss": assumption(
+        "mean ‖e‖² + ρ·mean (τ/100 N)² over [20, 46] s, ρ = 1e-3, CVaR₀.₇₅",
+        "formation keeping through the manoeuvre with noise and deviations; no criterion in the paper",
+    ),
 }
 
 
@@ -160,8 +194,10 @@ def reproduction(cfg: Config, progress: Callable[..., Any]) -> tuple[dict, list,
     late = _floats(metrics_of(build_loop(cfg, plant, estimator_start=cfg.t_follower_start)))
     bar.update(1)
     bar.close()
-    startup = [{"estimator_start_s": cfg.estimator_start, **{k: by_mode["kalman"][k] for k in late}},
-               {"estimator_start_s": cfg.t_follower_start, **late}]
+    startup = [
+        {"estimator_start_s": cfg.estimator_start, **{k: by_mode["kalman"][k] for k in late}},
+        {"estimator_start_s": cfg.t_follower_start, **late},
+    ]
     tr = jax.jit(lambda: simulate(build_loop(cfg, plant), initial_state(), timing(cfg.dt, cfg.t_final, 10)))()
     return by_mode, rows, startup, tr
 
@@ -176,9 +212,16 @@ def error_bands(tr: Any, cfg: Config) -> list[dict]:
         sel = (t >= lo) & (t < hi)
         if sel.any():
             mx = np.abs(e[sel]).max(axis=0)
-            rows.append({"t_from_s": lo, "t_to_s": hi, "max_abs_x_m": mx[0], "max_abs_y_m": mx[1],
-                         "max_abs_z_m": mx[2], "within_paper_bands": bool(mx[0] <= 0.02 and mx[1] <= 0.002
-                                                                           and mx[2] <= 0.01)})
+            rows.append(
+                {
+                    "t_from_s": lo,
+                    "t_to_s": hi,
+                    "max_abs_x_m": mx[0],
+                    "max_abs_y_m": mx[1],
+                    "max_abs_z_m": mx[2],
+                    "within_paper_bands": bool(mx[0] <= 0.02 and mx[1] <= 0.002 and mx[2] <= 0.01),
+                }
+            )
     return rows
 
 
@@ -187,10 +230,10 @@ def monte_carlo_part(cfg: Config, progress: Callable[..., Any]) -> dict:
     space = deviation_space(cfg)
     out = {}
     for label, mode in (("with_prediction", "kalman"), ("without_prediction", "hold")):
-        out[label] = mc.monte_carlo(mc_metric(cfg, mode), space, runs, cfg.seed, block_size=min(runs, 32),
-                                    progress=progress)
+        out[label] = mc.monte_carlo(
+            mc_metric(cfg, mode), space, runs, cfg.seed, block_size=min(runs, 32), progress=progress
+        )
     return out
-
 
 
 def tuning_part(cfg: Config, progress: Callable[..., Any]) -> tuple[dict, list, stages.TuningStage]:
@@ -198,20 +241,42 @@ def tuning_part(cfg: Config, progress: Callable[..., Any]) -> tuple[dict, list, 
     train = tuning_problem(cfg, cfg.tune_samples, cfg.seed + 1)
     held = tuning_problem(cfg, cfg.tune_holdout, cfg.seed + 2)
     stage = stages.gradient_tuning(  # reverse mode: 14 parameters over a 23k-step scan
-        train, steps=cfg.tune_steps, optimizer=optax.adam(cfg.tune_lr), mode="reverse", progress=progress,
-        loss_label="CVaR loss", title="gradient tuning of Λ, K_s, Q, R")
+        train,
+        steps=cfg.tune_steps,
+        optimizer=optax.adam(cfg.tune_lr),
+        mode="reverse",
+        progress=progress,
+        loss_label="CVaR loss",
+        title="gradient tuning of Λ, K_s, Q, R",
+    )
     res = stage.result
     theta0 = train.space.init
     key = jax.random.PRNGKey(cfg.seed)
     metrics_of = jax.jit(lambda loop: run_metrics(cfg, loop, key))
     exact, rows = {}, []
     for label, th in (("paper", theta0), ("tuned", res.params)):
-        loop = build_loop(cfg, true_plant(cfg), lam=th["lam"], k_s=th["k_s"],
-                          accel_psd=10.0 ** th["log10_accel_psd"], meas_std=10.0 ** th["log10_meas_std"])
-        exact[label] = {"train_cvar": float(train.loss(th)) if label == "paper" else float(res.loss),
-                        "holdout_cvar": float(held.jitted.loss(th)), **_floats(metrics_of(loop))}
-        rows.append({"gains": label, **train.space.flat(th), "accel_psd": float(10.0 ** th["log10_accel_psd"]),
-                     "meas_std": float(10.0 ** th["log10_meas_std"]), **exact[label]})
+        loop = build_loop(
+            cfg,
+            true_plant(cfg),
+            lam=th["lam"],
+            k_s=th["k_s"],
+            accel_psd=10.0 ** th["log10_accel_psd"],
+            meas_std=10.0 ** th["log10_meas_std"],
+        )
+        exact[label] = {
+            "train_cvar": float(train.loss(th)) if label == "paper" else float(res.loss),
+            "holdout_cvar": float(held.jitted.loss(th)),
+            **_floats(metrics_of(loop)),
+        }
+        rows.append(
+            {
+                "gains": label,
+                **train.space.flat(th),
+                "accel_psd": float(10.0 ** th["log10_accel_psd"]),
+                "meas_std": float(10.0 ** th["log10_meas_std"]),
+                **exact[label],
+            }
+        )
     return exact, rows, stage
 
 
@@ -227,15 +292,22 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     k = nominal["kalman"]
     wp, wo = mc_res["with_prediction"], mc_res["without_prediction"]
     metrics = {
-        "err0_m": k["err0_m"], "t_to_0p2m_s": k["t_to_0p2m_s"],
-        "ss_err_x_m": k["ss_err_x_m"], "ss_err_y_m": k["ss_err_y_m"], "ss_err_z_m": k["ss_err_z_m"],
+        "err0_m": k["err0_m"],
+        "t_to_0p2m_s": k["t_to_0p2m_s"],
+        "ss_err_x_m": k["ss_err_x_m"],
+        "ss_err_y_m": k["ss_err_y_m"],
+        "ss_err_z_m": k["ss_err_z_m"],
         "mc_t_to_0p2m_p95_s": float(wp["t_to_0p2m_s"].quantile(0.95)),
         "mc_ss_err_p95_m_with_prediction": float(wp["ss_err_m"].quantile(0.95)),
         "mc_ss_err_p95_m_without_prediction": float(wo["ss_err_m"].quantile(0.95)),
-        "t_last_above_0p2m_s": k["t_last_above_0p2m_s"], "t32_peak_err_m": k["t32_peak_err_m"],
-        "rel_vel_x_min_mps": k["rel_vel_x_min_mps"], "ss_rel_vel_x_mps": k["ss_rel_vel_x_mps"],
-        "startup_est_err_max_m": k["startup_est_err_max_m"], "startup_est_settled_s": k["startup_est_settled_s"],
-        "t32_est_err_peak_m": k["t32_est_err_peak_m"], "t32_est_recovery_s": k["t32_est_recovery_s"],
+        "t_last_above_0p2m_s": k["t_last_above_0p2m_s"],
+        "t32_peak_err_m": k["t32_peak_err_m"],
+        "rel_vel_x_min_mps": k["rel_vel_x_min_mps"],
+        "ss_rel_vel_x_mps": k["ss_rel_vel_x_mps"],
+        "startup_est_err_max_m": k["startup_est_err_max_m"],
+        "startup_est_settled_s": k["startup_est_settled_s"],
+        "t32_est_err_peak_m": k["t32_est_err_peak_m"],
+        "t32_est_recovery_s": k["t32_est_recovery_s"],
         "ss_err_m_without_prediction": nominal["hold"]["ss_err_m"],
         "ss_err_m_polynomial_only": nominal["polynomial"]["ss_err_m"],
         "mc_runs": int(wp.runs),
@@ -248,14 +320,21 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         "tune_holdout_cvar_tuned": exact["tuned"]["holdout_cvar"],
         "tune_train_cvar_paper": exact["paper"]["train_cvar"],
         "tune_train_cvar_tuned": exact["tuned"]["train_cvar"],
-        "tuned_t_to_0p2m_s": exact["tuned"]["t_to_0p2m_s"], "tuned_ss_err_m": exact["tuned"]["ss_err_m"],
+        "tuned_t_to_0p2m_s": exact["tuned"]["t_to_0p2m_s"],
+        "tuned_ss_err_m": exact["tuned"]["ss_err_m"],
         "tuned_t32_peak_err_m": exact["tuned"]["t32_peak_err_m"],
-        "tune_steps": info["steps"], "tune_wall_s": info["wall_s"],
+        "tune_steps": info["steps"],
+        "tune_wall_s": info["wall_s"],
     }
     mc_rows = [{"prediction": label, **res.row()} for label, res in mc_res.items()]
-    figs = {"reproduction": _fig_reproduction(tr, cfg), "monte_carlo": figures.mc_cdfs(
-        mc_res, {"ss_err_m": ("steady-state error ‖e‖, m", True), "t_to_0p2m_s": ("time to 0.2 m, s", False)},
-        title="Monte Carlo over deviations (uniform ±Δ) and camera noise")}
+    figs = {
+        "reproduction": _fig_reproduction(tr, cfg),
+        "monte_carlo": figures.mc_cdfs(
+            mc_res,
+            {"ss_err_m": ("steady-state error ‖e‖, m", True), "t_to_0p2m_s": ("time to 0.2 m, s", False)},
+            title="Monte Carlo over deviations (uniform ±Δ) and camera noise",
+        ),
+    }
     notes = [
         f"reproduction: RK4 at dt = {cfg.dt} s over {cfg.t_final} s, exact leader pose, exact sign; "
         f"paper: 7.8 m → 0.2 m by 28 s, ss bands x 0.02 / y 0.002 / z 0.01 m, relative velocity +1.2 → −1.1 m/s",
@@ -264,15 +343,23 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         f"tuning: dt = {cfg.tune_dt} s, tanh width {cfg.tune_width} m/s; the 'paper'/'tuned' rows of table "
         "tuning re-run both with the exact sign at dt = 1 ms",
     ]
-    own = stages.Stage(tables={"reproduction": rows, "startup_variants": startup, "error_bands": bands,
-                               "monte_carlo": mc_rows, "tuning": tune_rows}, figures=figs)
+    own = stages.Stage(
+        tables={
+            "reproduction": rows,
+            "startup_variants": startup,
+            "error_bands": bands,
+            "monte_carlo": mc_rows,
+            "tuning": tune_rows,
+        },
+        figures=figs,
+    )
     return stages.merge(own, tuning, metrics=metrics, notes=notes)
 
 
 STUDY = Study(
     name="auv_formation",
     description="Leader–follower AUV formation from a 10 Hz camera: LS + Kalman leader prediction, "
-                "computed torque + sliding mode; reproduction, Monte Carlo, CVaR gradient tuning (seed 002)",
+    "computed torque + sliding mode; reproduction, Monte Carlo, CVaR gradient tuning (seed 002)",
     config=Config,
     presets=PRESETS,
     claims=CLAIMS,

@@ -26,7 +26,8 @@ from experiments.progress import bar
 from experiments.registry import discover, get_study
 from experiments.report import write_report
 from experiments.runner import as_study
-from experiments.sweep_command import add_parser as add_sweep_parser, run_sweep_command
+from experiments.sweep_command import add_parser as add_sweep_parser
+from experiments.sweep_command import run_sweep_command
 
 
 def add_preset_arguments(parser: argparse.ArgumentParser) -> None:
@@ -35,7 +36,11 @@ def add_preset_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--preset", default=None, help="named config preset of the study (default: full)")
     group.add_argument("--quick", action="store_true", help="the study's 'quick' preset (= --preset quick)")
     parser.add_argument(
-        "--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
         help="override a config field after the preset (repeatable), e.g. --set t_final=20",
     )
 

@@ -29,7 +29,9 @@ def _convert(name: str, raw: str, current: Any, annotation: Any) -> Any:
             return type(current)(value)
         return json.loads(raw)
     except (ValueError, json.JSONDecodeError) as exc:
-        raise ValueError(f"--set {name}={raw}: cannot convert to {getattr(target, '__name__', target)} ({exc})") from None
+        raise ValueError(
+            f"--set {name}={raw}: cannot convert to {getattr(target, '__name__', target)} ({exc})"
+        ) from None
 
 
 def apply_overrides(config: Any, overrides: list[str]) -> Any:

@@ -47,29 +47,48 @@ class Config:
 
 
 def problem_of(cfg: Config) -> Problem:
-    space = ParamSpace(kp=Param(lo=0.05, hi=20.0, init=1.0, log=True),  # V/rad
-                       ki=Param(lo=0.01, hi=20.0, init=0.5, log=True))  # V/(rad·s)
+    space = ParamSpace(
+        kp=Param(lo=0.05, hi=20.0, init=1.0, log=True),  # V/rad
+        ki=Param(lo=0.01, hi=20.0, init=0.5, log=True),
+    )  # V/(rad·s)
 
     def build(p: dict[str, Any], d: dict[str, Any]) -> Scenario:
         pi = pid(kp=p["kp"], ki=p["ki"], anti_windup="none")
-        loop = ClosedLoop(dc_motor(K=d["K"], T=d["T"]), pi, reference=FilteredStep(1.0, cfg.prefilter),
-                          disturbance=Step(cfg.load, cfg.t_load))
+        loop = ClosedLoop(
+            dc_motor(K=d["K"], T=d["T"]),
+            pi,
+            reference=FilteredStep(1.0, cfg.prefilter),
+            disturbance=Step(cfg.load, cfg.t_load),
+        )
         return Scenario(loop, jnp.zeros(2), Timing(cfg.t_final, cfg.ts / cfg.substeps, cfg.ts))
 
     return Problem(
-        "dc_motor_pi", space, combine(itae=itae(), energy=(cfg.rho, control_energy())), build,
+        "dc_motor_pi",
+        space,
+        combine(itae=itae(), energy=(cfg.rho, control_energy())),
+        build,
         nominal={"K": cfg.K, "T": cfg.T},
-        uncertainty={"K": mc.deviation(cfg.K, cfg.uncertainty, relative=True),
-                     "T": mc.deviation(cfg.T, cfg.uncertainty, relative=True)})
+        uncertainty={
+            "K": mc.deviation(cfg.K, cfg.uncertainty, relative=True),
+            "T": mc.deviation(cfg.T, cfg.uncertainty, relative=True),
+        },
+    )
 
 
 def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     problem = problem_of(cfg)
     key = jax.random.PRNGKey(cfg.seed)
     tuned = stages.tune_and_compare(
-        problem, cfg.budget, ("gradient", "pso"), key=key, learning_rate=cfg.learning_rate,
-        n_starts=cfg.n_starts, n_particles=cfg.n_particles, progress=progress,
-        loss_label="J = ITAE + ρ·energy (rad·s²)")
+        problem,
+        cfg.budget,
+        ("gradient", "pso"),
+        key=key,
+        learning_rate=cfg.learning_rate,
+        n_starts=cfg.n_starts,
+        n_particles=cfg.n_particles,
+        progress=progress,
+        loss_label="J = ITAE + ρ·energy (rad·s²)",
+    )
     designs = tuned.designs
     steps = stages.responses(problem, designs, y_label="θ, rad", title="prefiltered step, load step at 1 s")
     robust = stages.robustness(problem, designs, cfg.mc_runs, cfg.seed, y_label="θ, rad", progress=progress)
@@ -80,12 +99,20 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
 STUDY = Study(
     name="dc_motor_pi",
     description="PI position control of a DC motor K/(s(Ts+1)): gradient vs PSO on equal budgets, "
-                "Monte Carlo over ±20 % in K and T",
+    "Monte Carlo over ±20 % in K and T",
     config=Config,
     presets={"quick": dict(budget=256, mc_runs=500)},
-    claims=[Claim("loss_ratio_gradient_to_pso", paper=1.0, rel_tol=0.01,
-                  source="both tuners should find the same optimum of this two-gain problem")],
-    assumptions={"motor": assumption("K = 10 rad/(V·s), T = 0.1 s", "a small PM motor; illustrative, no paper"),
-                 "loss": assumption("ITAE + 1e-2·∫u² dt", "ITAE for the transient, some energy for finite gains")},
+    claims=[
+        Claim(
+            "loss_ratio_gradient_to_pso",
+            paper=1.0,
+            rel_tol=0.01,
+            source="both tuners should find the same optimum of this two-gain problem",
+        )
+    ],
+    assumptions={
+        "motor": assumption("K = 10 rad/(V·s), T = 0.1 s", "a small PM motor; illustrative, no paper"),
+        "loss": assumption("ITAE + 1e-2·∫u² dt", "ITAE for the transient, some energy for finite gains"),
+    },
     run=run,
 )

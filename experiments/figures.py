@@ -29,17 +29,26 @@ def _plt():
     return plt
 
 
-def best_so_far(comparison: Comparison, *, reference: float | None = None, title: str | None = None,
-                loss_label: str = "loss"):
+def best_so_far(
+    comparison: Comparison, *, reference: float | None = None, title: str | None = None, loss_label: str = "loss"
+):
     """Best loss vs simulations and vs wall time per tuner (``reference``: plot the gap to it, log
     scale); ``loss_label`` names the loss and its unit."""
     _plt()
     return plot_comparison(comparison, reference=reference, title=title, loss_label=loss_label)
 
 
-def responses(problem: Any, designs: dict[str, Any], *, channel: int = 0, y_label: str = "y",
-              time_unit: str = "s", title: str | None = None, draw: dict[str, Any] | None = None,
-              losses: dict[str, float] | None = None):
+def responses(
+    problem: Any,
+    designs: dict[str, Any],
+    *,
+    channel: int = 0,
+    y_label: str = "y",
+    time_unit: str = "s",
+    title: str | None = None,
+    draw: dict[str, Any] | None = None,
+    losses: dict[str, float] | None = None,
+):
     """Output ``channel`` of ``problem.simulate(params, draw)`` for every design, with the reference."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(7, 4))
@@ -49,8 +58,9 @@ def responses(problem: Any, designs: dict[str, Any], *, channel: int = 0, y_labe
         label = name if losses is None or name not in losses else f"{name} (J = {losses[name]:.5g})"
         ax.plot(np.asarray(tr.t), np.asarray(tr.y[:, channel]), label=label)
     if tr is not None:
-        ax.plot(np.asarray(tr.t), np.asarray(tr.r[:, min(channel, tr.r.shape[1] - 1)]), "k--", lw=0.8,
-                label="reference")
+        ax.plot(
+            np.asarray(tr.t), np.asarray(tr.r[:, min(channel, tr.r.shape[1] - 1)]), "k--", lw=0.8, label="reference"
+        )
     ax.set_xlabel(f"t, {time_unit}")
     ax.set_ylabel(y_label)
     ax.set_title(title or f"{problem.name}: responses of the tuned designs")
@@ -60,8 +70,14 @@ def responses(problem: Any, designs: dict[str, Any], *, channel: int = 0, y_labe
     return fig
 
 
-def trajectory_bands(problem: Any, params: Any, draws: dict[str, Any], *, channel: int = 0,
-                     quantiles: tuple[float, ...] = (0.05, 0.5, 0.95)) -> tuple[np.ndarray, np.ndarray]:
+def trajectory_bands(
+    problem: Any,
+    params: Any,
+    draws: dict[str, Any],
+    *,
+    channel: int = 0,
+    quantiles: tuple[float, ...] = (0.05, 0.5, 0.95),
+) -> tuple[np.ndarray, np.ndarray]:
     """``(t (N,), q (len(quantiles), N))``: percentiles over ``draws`` (a batched dict) of output
     ``channel`` of ``problem.simulate(params, draw)`` (noise from the problem's fixed key)."""
     tr = problem.jitted.simulate_batch(params, draws)  # compiled once per problem, for any params
@@ -69,8 +85,14 @@ def trajectory_bands(problem: Any, params: Any, draws: dict[str, Any], *, channe
     return np.asarray(tr.t[0]), np.asarray(jnp.quantile(ys, jnp.asarray(quantiles), axis=0))
 
 
-def mc_bands(bands: dict[str, tuple[np.ndarray, np.ndarray]], *, y_label: str = "y", time_unit: str = "s",
-             title: str | None = None, quantiles: tuple[float, float, float] = (0.05, 0.5, 0.95)):
+def mc_bands(
+    bands: dict[str, tuple[np.ndarray, np.ndarray]],
+    *,
+    y_label: str = "y",
+    time_unit: str = "s",
+    title: str | None = None,
+    quantiles: tuple[float, float, float] = (0.05, 0.5, 0.95),
+):
     """Median line and the ``quantiles[0]``–``quantiles[2]`` band per design (``bands[name] = (t, q)`` of
     :func:`trajectory_bands`)."""
     plt = _plt()
@@ -106,8 +128,15 @@ def tuning_curve(history: Any, *, loss_label: str = "loss", title: str | None = 
     return fig
 
 
-def box_by_group(groups: dict[str, Any], *, y_label: str, title: str | None = None, log: bool = False,
-                 reference: float | None = None, reference_label: str = "reference"):
+def box_by_group(
+    groups: dict[str, Any],
+    *,
+    y_label: str,
+    title: str | None = None,
+    log: bool = False,
+    reference: float | None = None,
+    reference_label: str = "reference",
+):
     """One box per group (``groups[name]`` = the samples), optionally a horizontal reference line."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(8, 4))
@@ -126,8 +155,16 @@ def box_by_group(groups: dict[str, Any], *, y_label: str, title: str | None = No
     return fig
 
 
-def probability_curves(x: Any, curves: dict[str, tuple[Any, Any, Any]], *, x_label: str, y_label: str,
-                       title: str | None = None, log: bool = False, mark: float | None = None):
+def probability_curves(
+    x: Any,
+    curves: dict[str, tuple[Any, Any, Any]],
+    *,
+    x_label: str,
+    y_label: str,
+    title: str | None = None,
+    log: bool = False,
+    mark: float | None = None,
+):
     """``curves[name] = (p, lo, hi)`` over ``x``: probabilities with error bars to their interval
     (e.g. Wilson, :meth:`jaxsim.montecarlo.result.EventStats.interval`); ``mark``: a vertical line."""
     plt = _plt()

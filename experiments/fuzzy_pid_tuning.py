@@ -89,34 +89,53 @@ ASSUMPTIONS = {
     "operating_points": assumption(
         [[1.0, 0.0], [1.0, 0.3], [0.5, 0.4], [1.5, 0.2]],
         "the paper's two static-plant cases (g = 1, f = 0 / 0.3) plus two more that move the operating "
-        "point along the small- and large-gain sections"),
+        "point along the small- and large-gain sections",
+    ),
     "loss": assumption(
         "mean transient ITAE Σ t|y − y(T)|dt + quadratic penalty (w = 100) on normalised violations",
         "the spec suggests ITAE with constraints e_ss ≤ linear, monotone-ish response, |u| ≤ bound; "
-        "ITAE of y − y(T) measures the transient (the steady-state error is constrained separately)"),
-    "overshoot_max": assumption(2.0, "the brief's bound ('overshoot ≤ 2 %') replacing the paper's "
-                                     "'monotonic transient' rule"),
+        "ITAE of y − y(T) measures the transient (the steady-state error is constrained separately)",
+    ),
+    "overshoot_max": assumption(
+        2.0, "the brief's bound ('overshoot ≤ 2 %') replacing the paper's 'monotonic transient' rule"
+    ),
     "u_max": assumption(1.5, "control bound, 1.5× the paper's saturation level d = 1"),
-    "box": assumption("(a, c − a, b, d − b) ∈ [0.05, 1.5] × [0.05, 1.5] × [0.02, 1] × [0, 1.5]",
-                      "search domain of PSO and the grid; keeps 0 < a < c and 0 < b ≤ d"),
-    "timing": assumption("RK4, dt = controller period = 2 ms, horizon 6 s",
-                         "every closed-loop pole of the static loop is faster than 2 1/s, so e(6 s) "
-                         "is the steady state to ~1e-5"),
+    "box": assumption(
+        "(a, c − a, b, d − b) ∈ [0.05, 1.5] × [0.05, 1.5] × [0.02, 1] × [0, 1.5]",
+        "search domain of PSO and the grid; keeps 0 < a < c and 0 < b ≤ d",
+    ),
+    "timing": assumption(
+        "RK4, dt = controller period = 2 ms, horizon 6 s",
+        "every closed-loop pole of the static loop is faster than 2 1/s, so e(6 s) is the steady state to ~1e-5",
+    ),
     "fis_templates": assumption(
         "7 input terms (peaks 0, ±p1..3), Mamdani output triangles at 0, ±q1..3 of half-width w; "
         "Sugeno constants 0, ±q1..3; initial p = (0.375, 0.75, 1.2), q = (0.15, 0.3, 1.0)",
-        "the paper gives no membership functions; these start on the paper's characteristic"),
+        "the paper gives no membership functions; these start on the paper's characteristic",
+    ),
 }
 
 CLAIMS = [
     Claim("k_mds", paper=0.4, rel_tol=1e-9, source="seed000 paper 1: K_mds = 0.4 for the static plant (spec §1.5)"),
-    Claim("settling_max_linear", paper=0.972, abs_tol=0.015,
-          source="spec §1.4 [our sim] (RK45, 1e-3 s): linear P, 2 % settling 0.972 s at every (g, f)",
-          note="tolerance: our sampling period (2 ms full, 4 ms quick, ≤ 10 ms) quantises the settling time"),
-    Claim("feasible_paper", paper=0.0, abs_tol=0.0,
-          source="spec §1.4 [our sim]: the paper's FC overshoots 6.25 % at f = 0.3 > σ_max = 2 %"),
-    Claim("initial_loss_sugeno_vs_paper_rel_diff", paper=0.0, abs_tol=1e-9,
-          source="the zero-order Sugeno template reproduces the paper's characteristic exactly"),
+    Claim(
+        "settling_max_linear",
+        paper=0.972,
+        abs_tol=0.015,
+        source="spec §1.4 [our sim] (RK45, 1e-3 s): linear P, 2 % settling 0.972 s at every (g, f)",
+        note="tolerance: our sampling period (2 ms full, 4 ms quick, ≤ 10 ms) quantises the settling time",
+    ),
+    Claim(
+        "feasible_paper",
+        paper=0.0,
+        abs_tol=0.0,
+        source="spec §1.4 [our sim]: the paper's FC overshoots 6.25 % at f = 0.3 > σ_max = 2 %",
+    ),
+    Claim(
+        "initial_loss_sugeno_vs_paper_rel_diff",
+        paper=0.0,
+        abs_tol=1e-9,
+        source="the zero-order Sugeno template reproduces the paper's characteristic exactly",
+    ),
 ]
 
 
@@ -130,8 +149,12 @@ class Loop:
         self.points = jnp.asarray(cfg.operating_points, float)
         num, den = (np.asarray(v) for v in static_transfer_function(StaticParams(cfg.K, cfg.T1, cfg.T2)))
         self.k_mds = max_stability_degree(num, den, "P").gains["kp"]
-        self.e_lin = jnp.asarray([steady_state_error("static", cfg.K, fz.linear(self.k_mds), g=g, f=f).error
-                                  for g, f in cfg.operating_points])
+        self.e_lin = jnp.asarray(
+            [
+                steady_state_error("static", cfg.K, fz.linear(self.k_mds), g=g, f=f).error
+                for g, f in cfg.operating_points
+            ]
+        )
         self.exact = jax.jit(lambda char: (self.penalised(char), self.terms(char, smooth=False)))
         self.rollouts_jit = jax.jit(self.rollouts)
 
@@ -140,8 +163,9 @@ class Loop:
         ctrl = Controller(FuzzyPIDParams(p=char), fuzzy_pid_init, fuzzy_pid_step, name="fuzzy_p")
 
         def one(gf):
-            tr = simulate(ClosedLoop(self.plant, ctrl, reference=Step(gf[0]), disturbance=Step(gf[1])),
-                          jnp.zeros(2), self.timing)
+            tr = simulate(
+                ClosedLoop(self.plant, ctrl, reference=Step(gf[0]), disturbance=Step(gf[1])), jnp.zeros(2), self.timing
+            )
             return tr.t, tr.y[:, 0], tr.u[:, 0]
 
         return jax.vmap(one)(self.points)
@@ -160,12 +184,19 @@ class Loop:
         else:
             overshoot = jax.vmap(lambda tt, yy: step_info(tt, yy).overshoot)(t, y)
         u_peak = jnp.max(jnp.abs(u))
-        h = jnp.concatenate([(e_final - self.e_lin) / self.e_lin,
-                             (overshoot - bound) / cfg.overshoot_max,
-                             jnp.atleast_1d((u_peak - cfg.u_max) / cfg.u_max)])
+        h = jnp.concatenate(
+            [
+                (e_final - self.e_lin) / self.e_lin,
+                (overshoot - bound) / cfg.overshoot_max,
+                jnp.atleast_1d((u_peak - cfg.u_max) / cfg.u_max),
+            ]
+        )
         settling = jax.vmap(lambda tt, yy: step_info(tt, yy).settling_time)(t, y)
-        return jnp.mean(itae), h, dict(itae=itae, overshoot=overshoot, e_final=e_final, u_peak=u_peak,
-                                       settling=settling)
+        return (
+            jnp.mean(itae),
+            h,
+            dict(itae=itae, overshoot=overshoot, e_final=e_final, u_peak=u_peak, settling=settling),
+        )
 
     def penalised(self, char: Any) -> jax.Array:
         f, h, _ = self.terms(char, smooth=False)
@@ -173,16 +204,22 @@ class Loop:
 
     def problem(self, name: str, space: ParamSpace, char_of: Callable[[Any], Any], smooth: bool) -> Problem:
         """``J``'s objective ``f`` and constraints ``h`` of the characteristic ``char_of(params)``."""
-        return Problem.from_loss(name, space, lambda p, d, k: self.terms(char_of(p), smooth)[0],
-                                 constraints=lambda p: self.terms(char_of(p), smooth)[1],
-                                 penalty_weight=self.cfg.penalty_weight)
+        return Problem.from_loss(
+            name,
+            space,
+            lambda p, d, k: self.terms(char_of(p), smooth)[0],
+            constraints=lambda p: self.terms(char_of(p), smooth)[1],
+            penalty_weight=self.cfg.penalty_weight,
+        )
 
 
 def three_section_space(cfg: Config) -> ParamSpace:
     """``e = (a, c)``, ``u = (b, d)`` from the paper's controller; box of ``(a, c − a, b, d − b)``."""
     a, b, c, d = cfg.paper_fc
-    return ParamSpace(e=Sorted(lo=cfg.box_lo[:2], hi=cfg.box_hi[:2], init=(a, c), min_gap=0.02),
-                      u=Sorted(lo=cfg.box_lo[2:], hi=cfg.box_hi[2:], init=(b, d)))
+    return ParamSpace(
+        e=Sorted(lo=cfg.box_lo[:2], hi=cfg.box_hi[:2], init=(a, c), min_gap=0.02),
+        u=Sorted(lo=cfg.box_lo[2:], hi=cfg.box_hi[2:], init=(b, d)),
+    )
 
 
 def char_of(params: dict, temperature: float, form: str) -> fz.ThreeSection:
@@ -193,41 +230,77 @@ def char_of(params: dict, temperature: float, form: str) -> fz.ThreeSection:
 def report(loop: Loop, char: Any, name: str, sims: int = 0, wall_s: float = 0.0, compile_s: float = 0.0) -> dict:
     """Exact J and closed-loop metrics of one tuned (or reference) characteristic."""
     J, (f, h, d) = loop.exact(char)
-    row = {"method": name, "loss_J": float(J), "mean_itae": float(f),
-           "max_violation": float(jnp.max(h)), "feasible": bool(jnp.all(h <= 1e-9)),
-           "settling_mean_s": float(jnp.mean(d["settling"])), "settling_max_s": float(jnp.max(d["settling"])),
-           "overshoot_max_pct": float(jnp.max(d["overshoot"])), "u_peak": float(d["u_peak"]),
-           "e_ss_over_linear_max": float(jnp.max(d["e_final"] / loop.e_lin)),
-           "sims": int(sims), "wall_s": float(wall_s), "compile_s": float(compile_s)}
+    row = {
+        "method": name,
+        "loss_J": float(J),
+        "mean_itae": float(f),
+        "max_violation": float(jnp.max(h)),
+        "feasible": bool(jnp.all(h <= 1e-9)),
+        "settling_mean_s": float(jnp.mean(d["settling"])),
+        "settling_max_s": float(jnp.max(d["settling"])),
+        "overshoot_max_pct": float(jnp.max(d["overshoot"])),
+        "u_peak": float(d["u_peak"]),
+        "e_ss_over_linear_max": float(jnp.max(d["e_final"] / loop.e_lin)),
+        "sims": int(sims),
+        "wall_s": float(wall_s),
+        "compile_s": float(compile_s),
+    }
     if isinstance(char, fz.ThreeSection):
         row.update({k: float(getattr(char, k)) for k in "abcd"})
-        row["K1"], row["K2"] = float(char.b) / float(char.a), (float(char.d) - float(char.b)) / (float(char.c) - float(char.a))
+        row["K1"], row["K2"] = (
+            float(char.b) / float(char.a),
+            (float(char.d) - float(char.b)) / (float(char.c) - float(char.a)),
+        )
     return row
 
 
 def compare_three_section(loop: Loop, cfg: Config, progress: Callable[..., Any]):
     """Gradient (smooth surrogate, augmented Lagrangian), PSO and grid (exact J), equal budgets."""
     n_pts, budget = len(cfg.operating_points), cfg.budget
-    if cfg.grid_points_per_dim ** 4 > budget or budget % cfg.pso_particles or budget % cfg.n_starts:
+    if cfg.grid_points_per_dim**4 > budget or budget % cfg.pso_particles or budget % cfg.n_starts:
         raise ValueError("budget: must be a multiple of pso_particles and n_starts, and ≥ grid_points_per_dim**4")
     space = three_section_space(cfg)
     exact = loop.problem("fuzzy_p_exact", space, lambda p: char_of(p, cfg.smooth_temperature, "exact"), False)
     smooth = loop.problem("fuzzy_p_smooth", space, lambda p: char_of(p, cfg.smooth_temperature, "smooth"), True)
     key = jax.random.PRNGKey(cfg.seed)
     tuners = {
-        "gradient": lambda _, __: tune(smooth, optimizer=optax.adam(cfg.learning_rate), steps=budget // cfg.n_starts,
-                                       n_starts=cfg.n_starts, key=key, init_spread=cfg.init_spread,
-                                       constraint_method="augmented_lagrangian", sims_per_eval=n_pts, mode="forward"),
-        "pso": lambda pb, _: pso(pb, n_particles=cfg.pso_particles, n_iters=budget // cfg.pso_particles, key=key,
-                                 sims_per_eval=n_pts),
+        "gradient": lambda _, __: tune(
+            smooth,
+            optimizer=optax.adam(cfg.learning_rate),
+            steps=budget // cfg.n_starts,
+            n_starts=cfg.n_starts,
+            key=key,
+            init_spread=cfg.init_spread,
+            constraint_method="augmented_lagrangian",
+            sims_per_eval=n_pts,
+            mode="forward",
+        ),
+        "pso": lambda pb, _: pso(
+            pb, n_particles=cfg.pso_particles, n_iters=budget // cfg.pso_particles, key=key, sims_per_eval=n_pts
+        ),
         "grid": lambda pb, _: grid_search(pb, points_per_dim=cfg.grid_points_per_dim, sims_per_eval=n_pts),
     }
-    cmp = stages.tune_and_compare(exact, budget * n_pts, tuners, progress=progress, figure="tuning_comparison",
-                                  loss_label="J (gradient: smooth surrogate), s²",
-                                  title="fuzzy P (a, b, c, d): J vs budget (simulations = evaluations × points)")
+    cmp = stages.tune_and_compare(
+        exact,
+        budget * n_pts,
+        tuners,
+        progress=progress,
+        figure="tuning_comparison",
+        loss_label="J (gradient: smooth surrogate), s²",
+        title="fuzzy P (a, b, c, d): J vs budget (simulations = evaluations × points)",
+    )
     cmp.notes = [f"budget {budget} loss evaluations per method, each simulating {n_pts} operating points"]
-    rows = [report(loop, char_of(cmp.designs[name], cfg.smooth_temperature, "exact"), name, r.n_sims, r.wall_s,
-                   getattr(r, "compile_s", 0.0)) for name, r in cmp.comparison.results.items()]
+    rows = [
+        report(
+            loop,
+            char_of(cmp.designs[name], cfg.smooth_temperature, "exact"),
+            name,
+            r.n_sims,
+            r.wall_s,
+            getattr(r, "compile_s", 0.0),
+        )
+        for name, r in cmp.comparison.results.items()
+    ]
     rows.append(report(loop, fz.three_section(*cfg.paper_fc), "paper"))
     rows.append(report(loop, fz.linear(loop.k_mds), "linear K_mds"))
     return rows, cmp
@@ -236,8 +309,10 @@ def compare_three_section(loop: Loop, cfg: Config, progress: Callable[..., Any])
 def run_fis(loop: Loop, cfg: Config, kind: str):
     """Tune the breakpoints of a 7-term Mamdani or Sugeno P controller by gradient on the same J."""
     u_range = 1.6 * cfg.u_max
-    decl = dict(e=Sorted(lo=0.02, hi=2.0, init=(0.375, 0.75, 1.2), min_gap=0.02),
-                u=Sorted(lo=0.0, hi=2.0, init=(0.15, 0.3, 1.0)))
+    decl = dict(
+        e=Sorted(lo=0.02, hi=2.0, init=(0.375, 0.75, 1.2), min_gap=0.02),
+        u=Sorted(lo=0.0, hi=2.0, init=(0.15, 0.3, 1.0)),
+    )
     if kind == "mamdani":
         decl["width"] = Sorted(lo=0.0, hi=1.0, init=(0.1,), origin=0.01)  # one value > 0.01
 
@@ -247,21 +322,41 @@ def run_fis(loop: Loop, cfg: Config, kind: str):
         return fz.odd_sugeno(p["e"], p["u"])
 
     problem = loop.problem(f"fuzzy_p_{kind}", ParamSpace(**decl), build, True)
-    res = tune(problem, optimizer=optax.adam(cfg.fis_learning_rate), steps=cfg.fis_steps,
-               constraint_method="augmented_lagrangian", sims_per_eval=len(cfg.operating_points), mode="forward")
+    res = tune(
+        problem,
+        optimizer=optax.adam(cfg.fis_learning_rate),
+        steps=cfg.fis_steps,
+        constraint_method="augmented_lagrangian",
+        sims_per_eval=len(cfg.operating_points),
+        mode="forward",
+    )
     fis0, fis = build(problem.space.init), build(res.params)
     row = report(loop, fis, f"{kind} (gradient)", res.n_sims, res.wall_s, res.compile_s)
-    row0, e, char = report(loop, fis0, f"{kind} (initial)"), jnp.linspace(-2.5, 2.5, 251), jax.jit(fz.static_characteristic)
+    row0, e, char = (
+        report(loop, fis0, f"{kind} (initial)"),
+        jnp.linspace(-2.5, 2.5, 251),
+        jax.jit(fz.static_characteristic),
+    )
     u0, u = np.asarray(char(fis0, e)), np.asarray(char(fis, e))
     fit = fz.fit_three_section(e, u)
     row.update({f"fit_{k}": v for k, v in zip("abcd", fit.abcd)})
-    row.update(fit_rms=fit.rms, breakpoints_e=[round(float(v), 4) for v in res.params["e"]],
-               levels_u=[round(float(v), 4) for v in res.params["u"]])
+    row.update(
+        fit_rms=fit.rms,
+        breakpoints_e=[round(float(v), 4) for v in res.params["e"]],
+        levels_u=[round(float(v), 4) for v in res.params["u"]],
+    )
     return row, row0, (np.asarray(e), u0, u, fit)
 
 
-SHORT = {"gradient": "gradient", "pso": "pso", "grid": "grid", "paper": "paper", "linear K_mds": "linear",
-         "mamdani (gradient)": "mamdani", "sugeno (gradient)": "sugeno"}  # method → metric suffix
+SHORT = {
+    "gradient": "gradient",
+    "pso": "pso",
+    "grid": "grid",
+    "paper": "paper",
+    "linear K_mds": "linear",
+    "mamdani (gradient)": "mamdani",
+    "sugeno (gradient)": "sugeno",
+}  # method → metric suffix
 
 
 def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
@@ -277,19 +372,35 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     metrics.update({f"{k}_{n}": by[n][k] for n in ("gradient", "pso", "grid") for k in ("sims", "wall_s")})
     metrics.update({f"initial_loss_{k}": by[f"{k} (initial)"]["loss_J"] for k in ("mamdani", "sugeno")})
     metrics["initial_loss_sugeno_vs_paper_rel_diff"] = abs(metrics["initial_loss_sugeno"] / by["paper"]["loss_J"] - 1)
-    metrics.update(k_mds=loop.k_mds, budget_evals=cfg.budget, operating_points=len(cfg.operating_points),
-                   fis_steps=cfg.fis_steps, dt=cfg.dt, t_final=cfg.t_final, total_wall_s=time.perf_counter() - start)
+    metrics.update(
+        k_mds=loop.k_mds,
+        budget_evals=cfg.budget,
+        operating_points=len(cfg.operating_points),
+        fis_steps=cfg.fis_steps,
+        dt=cfg.dt,
+        t_final=cfg.t_final,
+        total_wall_s=time.perf_counter() - start,
+    )
     for name, key in SHORT.items():
         metrics[f"settling_max_{key}"] = by[name]["settling_max_s"]
         metrics[f"overshoot_max_{key}"] = by[name]["overshoot_max_pct"]
         metrics[f"feasible_{key}"] = float(by[name]["feasible"])
-    figures = {**cmp.figures, "tuned_characteristics": _plot_characteristics(rows, fis_curves, loop.k_mds),
-               "tuned_transients": _plot_transients(loop, cfg, rows)}
-    return StudyResult(metrics=metrics, tables={"three_section": rows, "fuzzy_systems": fis_rows,
-                                                "tuners": cmp.tables["comparison"]}, figures=figures,
-                       notes=[*cmp.notes, "J is re-evaluated with the exact characteristic and exact overshoot for "
-                              "every method (the gradient run's own curve is the smooth surrogate it optimised)",
-                              "wall_s: optimisation time without compilation (compile_s separately)"])
+    figures = {
+        **cmp.figures,
+        "tuned_characteristics": _plot_characteristics(rows, fis_curves, loop.k_mds),
+        "tuned_transients": _plot_transients(loop, cfg, rows),
+    }
+    return StudyResult(
+        metrics=metrics,
+        tables={"three_section": rows, "fuzzy_systems": fis_rows, "tuners": cmp.tables["comparison"]},
+        figures=figures,
+        notes=[
+            *cmp.notes,
+            "J is re-evaluated with the exact characteristic and exact overshoot for "
+            "every method (the gradient run's own curve is the smooth surrogate it optimised)",
+            "wall_s: optimisation time without compilation (compile_s separately)",
+        ],
+    )
 
 
 def _plot_characteristics(rows, fis_curves, k_mds):
@@ -304,11 +415,19 @@ def _plot_characteristics(rows, fis_curves, k_mds):
     for i, (kind, (ee, u0, u, fit)) in enumerate(fis_curves.items()):
         ax2.plot(ee, u0, ":", color=f"C{i}", lw=1, label=f"{kind}: initial")
         ax2.plot(ee, u, color=f"C{i}", lw=2, label=f"{kind}: tuned")
-        ax2.plot(ee, np.asarray(fit.params(jnp.asarray(ee))), "--", color=f"C{i}", lw=1,
-                 label=f"{kind} fit (a, b, c, d) = " + ", ".join(f"{v:.3f}" for v in fit.abcd))
+        ax2.plot(
+            ee,
+            np.asarray(fit.params(jnp.asarray(ee))),
+            "--",
+            color=f"C{i}",
+            lw=1,
+            label=f"{kind} fit (a, b, c, d) = " + ", ".join(f"{v:.3f}" for v in fit.abcd),
+        )
     ax2.set_xlim(0, 2.5)
-    for ax, title in ((ax1, "tuned three-section characteristics (u ≥ 0 half)"),
-                      (ax2, "tuned Mamdani and Sugeno controllers: static characteristics")):
+    for ax, title in (
+        (ax1, "tuned three-section characteristics (u ≥ 0 half)"),
+        (ax2, "tuned Mamdani and Sugeno controllers: static characteristics"),
+    ):
         ax.set(title=title, xlabel="e (error units)", ylabel="u (control units)")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
@@ -339,10 +458,11 @@ def _plot_transients(loop, cfg, rows):
 STUDY = Study(
     name="fuzzy_pid_tuning",
     description="Fuzzy-PID paper: tune (a, b, c, d) by gradient vs PSO vs grid on ITAE with e_ss/overshoot/|u| "
-                "constraints; tune Mamdani and Sugeno breakpoints",
+    "constraints; tune Mamdani and Sugeno breakpoints",
     config=Config,
-    presets={"quick": dict(budget=81, pso_particles=9, grid_points_per_dim=3, n_starts=3, fis_steps=15,
-                           t_final=4.0, dt=4e-3)},
+    presets={
+        "quick": dict(budget=81, pso_particles=9, grid_points_per_dim=3, n_starts=3, fis_steps=15, t_final=4.0, dt=4e-3)
+    },
     claims=CLAIMS,
     assumptions=ASSUMPTIONS,
     run=run,

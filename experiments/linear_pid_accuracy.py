@@ -31,9 +31,9 @@ from jaxsim.control.stability_degree import (
     stability_degree,
 )
 from jaxsim.control.steady_state import final_value_error, paper_table_error
+from jaxsim.core.metrics import steady_state
 from jaxsim.core.rollout import ClosedLoop, Timing, simulate
 from jaxsim.core.signals import Ramp, Step, Sum
-from jaxsim.core.metrics import steady_state
 from jaxsim.plants.second_order import (
     AstaticParams,
     StaticParams,
@@ -74,10 +74,18 @@ PRESETS = {"quick": dict(t_final=10.0)}
 CLAIMS = [
     Claim("kp_mds_static", paper=0.4, rel_tol=1e-6, source="seed 000 paper 1, §1.3: K_mds = 0.4 (static plant)"),
     Claim("kp_mds_astatic", paper=1.25, rel_tol=1e-6, source="seed 000 paper 1, §1.3: K_mds = 1.25 (astatic plant)"),
-    Claim("max_normalised_error_sim_vs_table", paper=0.0, abs_tol=1e-6,
-          source="seed 000 paper 1, Tables 1–2 (symbolic steady-state errors) against the simulation"),
-    Claim("max_normalised_error_final_value_vs_table", paper=0.0, abs_tol=1e-9,
-          source="seed 000 paper 1, Tables 1–2 against the final-value theorem on the loop polynomials"),
+    Claim(
+        "max_normalised_error_sim_vs_table",
+        paper=0.0,
+        abs_tol=1e-6,
+        source="seed 000 paper 1, Tables 1–2 (symbolic steady-state errors) against the simulation",
+    ),
+    Claim(
+        "max_normalised_error_final_value_vs_table",
+        paper=0.0,
+        abs_tol=1e-9,
+        source="seed 000 paper 1, Tables 1–2 against the final-value theorem on the loop polynomials",
+    ),
 ]
 
 ASSUMPTIONS = {
@@ -129,15 +137,26 @@ def _cell_params(cfg: Config, designs, pname: str):
             kis.append(g.get("ki", 0.0))
             kds.append(g.get("kd", 0.0))
             tfs.append(cfg.derivative_filter if s == "PD" else 0.0)
-            amp = {("reference", 0): cfg.g_const, ("reference", 1): cfg.g_slope,
-                   ("disturbance", 0): cfg.f_const, ("disturbance", 1): cfg.f_slope}[(source, order)]
+            amp = {
+                ("reference", 0): cfg.g_const,
+                ("reference", 1): cfg.g_slope,
+                ("disturbance", 0): cfg.f_const,
+                ("disturbance", 1): cfg.f_slope,
+            }[(source, order)]
             v = np.zeros(4)
             v[[("reference", 0), ("reference", 1), ("disturbance", 0), ("disturbance", 1)].index((source, order))] = amp
             sig.append(v)
     sig = np.array(sig)
     n = len(rows)
-    params = PIDParams(kp=jnp.array(kps), ki=jnp.array(kis), kd=jnp.array(kds), tf=jnp.array(tfs),
-                       u_min=jnp.full(n, -jnp.inf), u_max=jnp.full(n, jnp.inf), anti_windup="none")
+    params = PIDParams(
+        kp=jnp.array(kps),
+        ki=jnp.array(kis),
+        kd=jnp.array(kds),
+        tf=jnp.array(tfs),
+        u_min=jnp.full(n, -jnp.inf),
+        u_max=jnp.full(n, jnp.inf),
+        anti_windup="none",
+    )
     t0 = jnp.zeros(n)
     refs = Sum((Step(jnp.array(sig[:, 0]), t0), Ramp(jnp.array(sig[:, 1]), t0)))
     dists = Sum((Step(jnp.array(sig[:, 2]), t0), Ramp(jnp.array(sig[:, 3]), t0)))
@@ -175,22 +194,34 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
             g = designs[(pname, s)].gains
             tf = cfg.derivative_filter if s == "PD" else 0.0
             nc, dc = pid_transfer_function(g.get("kp", 0.0), g.get("ki", 0.0), g.get("kd", 0.0), tf)
-            mag = {("reference", 0): cfg.g_const, ("reference", 1): cfg.g_slope,
-                   ("disturbance", 0): cfg.f_const, ("disturbance", 1): cfg.f_slope}[(source, order)]
+            mag = {
+                ("reference", 0): cfg.g_const,
+                ("reference", 1): cfg.g_slope,
+                ("disturbance", 0): cfg.f_const,
+                ("disturbance", 1): cfg.f_slope,
+            }[(source, order)]
             fvt = final_value_error(num, den, nc, dc, source, order, mag)
-            paper = paper_table_error(pname, s, source, order, info["K"], g.get("kp", 0.0),
-                                      g.get("ki", 0.0), mag)
+            paper = paper_table_error(pname, s, source, order, info["K"], g.get("kp", 0.0), g.get("ki", 0.0), mag)
             ss = steady_state(jnp.asarray(e[i]), tail, rtol=cfg.drift_rtol)
             sim_value = float(ss.value) if bool(ss.converged) else float(np.sign(ss.drift) * np.inf)
             finite = np.isfinite(paper)
             err = abs(sim_value - paper) / max(abs(paper), abs(mag)) if finite and np.isfinite(sim_value) else np.nan
-            table.append({
-                "plant": pname, "controller": s, "input": label, "magnitude": mag,
-                "kp": g.get("kp", 0.0), "ki": g.get("ki", 0.0), "kd": g.get("kd", 0.0),
-                "analytic_table": paper, "analytic_final_value": fvt, "simulated": sim_value,
-                "status": "finite" if bool(ss.converged) else "diverges (∞)",
-                "normalised_error": err,
-            })
+            table.append(
+                {
+                    "plant": pname,
+                    "controller": s,
+                    "input": label,
+                    "magnitude": mag,
+                    "kp": g.get("kp", 0.0),
+                    "ki": g.get("ki", 0.0),
+                    "kd": g.get("kd", 0.0),
+                    "analytic_table": paper,
+                    "analytic_final_value": fvt,
+                    "simulated": sim_value,
+                    "status": "finite" if bool(ss.converged) else "diverges (∞)",
+                    "normalised_error": err,
+                }
+            )
     finite_rows = [r for r in table if np.isfinite(r["analytic_table"])]
     inf_rows = [r for r in table if not np.isfinite(r["analytic_table"])]
     fvt_vs_table = max(
@@ -199,9 +230,15 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     )
     inf_agree = all(not np.isfinite(r["analytic_final_value"]) for r in inf_rows)
     designs_rows = [
-        {"plant": p, "controller": s, **d.gains, "stability_degree": d.degree,
-         "poles": " ".join(f"{z.real:.4f}{z.imag:+.4f}j" for z in d.poles), "method": d.method,
-         "independent_search_degree": d.search_degree}
+        {
+            "plant": p,
+            "controller": s,
+            **d.gains,
+            "stability_degree": d.degree,
+            "poles": " ".join(f"{z.real:.4f}{z.imag:+.4f}j" for z in d.poles),
+            "method": d.method,
+            "independent_search_degree": d.search_degree,
+        }
         for (p, s), d in designs.items()
     ]
     metrics = {
@@ -222,11 +259,15 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     }
     figures = {f"transients_{p}": _plot_transients(p, *traces[p], table) for p in traces}
     figures["stability_degree_vs_kp"] = _plot_degree_curves(cfg, plants, designs)
-    return stages.merge(stages.Stage(tables={"steady_state_errors": table, "designs": designs_rows}, figures=figures),
-                        metrics=metrics, notes=[
-                            f"simulation: RK4, dt = controller period = {cfg.dt} s, horizon {t_final} s; "
-                            f"steady state = last saved sample, ∞ = drift over the last {cfg.drift_window} s "
-                            f"above rtol {cfg.drift_rtol}"])
+    return stages.merge(
+        stages.Stage(tables={"steady_state_errors": table, "designs": designs_rows}, figures=figures),
+        metrics=metrics,
+        notes=[
+            f"simulation: RK4, dt = controller period = {cfg.dt} s, horizon {t_final} s; "
+            f"steady state = last saved sample, ∞ = drift over the last {cfg.drift_window} s "
+            f"above rtol {cfg.drift_rtol}"
+        ],
+    )
 
 
 def _plot_transients(pname, t, e, rows, table):
@@ -260,8 +301,13 @@ def _plot_degree_curves(cfg, plants, designs):
         ax.plot(kps, eta, label=f"{pname} plant")
         d = designs[(pname, "P")]
         ax.plot(d.gains["kp"], d.degree, "o", color="k")
-        ax.annotate(f"Kp={d.gains['kp']:.3g}, η={d.degree:.3g}", (d.gains["kp"], d.degree),
-                    textcoords="offset points", xytext=(5, 5), fontsize=8)
+        ax.annotate(
+            f"Kp={d.gains['kp']:.3g}, η={d.degree:.3g}",
+            (d.gains["kp"], d.degree),
+            textcoords="offset points",
+            xytext=(5, 5),
+            fontsize=8,
+        )
     ax.set_xlabel("Kp")
     ax.set_ylabel("stability degree η = −max Re λ, 1/s")
     ax.set_title("P control: maximum stability degree")

@@ -63,10 +63,18 @@ ASSUMPTIONS = {
 CLAIMS = [  # (s+4)³ = s³ + 12s² + (20 + 40kp)s + 40ki, the loop's characteristic polynomial / 0.05
     Claim("kp_nominal", paper=0.7, rel_tol=1e-9, source="closed form: triple closed-loop root at −4"),
     Claim("ki_nominal", paper=1.6, rel_tol=1e-9, source="closed form: triple closed-loop root at −4"),
-    Claim("engine_vs_simulate_itae_rel_diff", paper=0.0, abs_tol=1e-12,
-          source="simulate + metrics.itae of one noise-free rollout (independent of fold and the engine)"),
-    Claim("engine_noise_free_itae_std", paper=0.0, abs_tol=1e-12,
-          source="no uncertainty, no noise: every run is the same rollout"),
+    Claim(
+        "engine_vs_simulate_itae_rel_diff",
+        paper=0.0,
+        abs_tol=1e-12,
+        source="simulate + metrics.itae of one noise-free rollout (independent of fold and the engine)",
+    ),
+    Claim(
+        "engine_noise_free_itae_std",
+        paper=0.0,
+        abs_tol=1e-12,
+        source="no uncertainty, no noise: every run is the same rollout",
+    ),
 ]
 
 
@@ -78,21 +86,28 @@ def nominal_gains(cfg: Config) -> dict[str, float]:
 
 def peak_overshoot(y_final: float = 1.0) -> costs.RunningCost:
     """``100·max(0, max_t y − y_final)/|y_final|`` of output 0 (%), a running max (not additive)."""
-    return costs.RunningCost(init=lambda: jnp.asarray(-jnp.inf), update=lambda a, tick, ts: jnp.maximum(a, tick.y[0]),
-                             finish=lambda a: 100.0 * jnp.maximum(a - y_final, 0.0) / abs(y_final))
+    return costs.RunningCost(
+        init=lambda: jnp.asarray(-jnp.inf),
+        update=lambda a, tick, ts: jnp.maximum(a, tick.y[0]),
+        finish=lambda a: 100.0 * jnp.maximum(a - y_final, 0.0) / abs(y_final),
+    )
 
 
 def problem_of(cfg: Config) -> Problem:
     """Gains ``kp``, ``ki`` as params; ``K``, ``T1``, ``T2``, ``noise_std`` as draws (nominal ± Δ)."""
     gains = nominal_gains(cfg)
-    space = ParamSpace(kp=Param(lo=1e-3, hi=100.0, init=gains["kp"], log=True),
-                       ki=Param(lo=1e-3, hi=100.0, init=gains["ki"], log=True))
+    space = ParamSpace(
+        kp=Param(lo=1e-3, hi=100.0, init=gains["kp"], log=True), ki=Param(lo=1e-3, hi=100.0, init=gains["ki"], log=True)
+    )
     timing = Timing(t_final=cfg.t_final, dt=cfg.dt, controller_period=cfg.dt)
 
     def build(p: dict[str, Any], d: dict[str, Any]) -> Scenario:
-        loop = ClosedLoop(static_plant(StaticParams(K=d["K"], T1=d["T1"], T2=d["T2"])),
-                          pid(kp=p["kp"], ki=p["ki"], anti_windup="none"),
-                          reference=Step(1.0), sensor=gaussian_sensor(d["noise_std"]))
+        loop = ClosedLoop(
+            static_plant(StaticParams(K=d["K"], T1=d["T1"], T2=d["T2"])),
+            pid(kp=p["kp"], ki=p["ki"], anti_windup="none"),
+            reference=Step(1.0),
+            sensor=gaussian_sensor(d["noise_std"]),
+        )
         return Scenario(loop, jnp.zeros(2), timing)
 
     uncertainty = {}
@@ -101,9 +116,14 @@ def problem_of(cfg: Config) -> Problem:
     if cfg.T_delta > 0:
         uncertainty["T1"] = mc.deviation(cfg.T1, cfg.T_delta, relative=True)
         uncertainty["T2"] = mc.deviation(cfg.T2, cfg.T_delta, relative=True)
-    return Problem("noisy_pi", space, costs.combine(itae=costs.itae(), overshoot=peak_overshoot()), build,
-                   nominal={"K": cfg.K, "T1": cfg.T1, "T2": cfg.T2, "noise_std": cfg.noise_std},
-                   uncertainty=uncertainty)
+    return Problem(
+        "noisy_pi",
+        space,
+        costs.combine(itae=costs.itae(), overshoot=peak_overshoot()),
+        build,
+        nominal={"K": cfg.K, "T1": cfg.T1, "T2": cfg.T2, "noise_std": cfg.noise_std},
+        uncertainty=uncertainty,
+    )
 
 
 def per_run(cfg: Config) -> PerRun:
@@ -139,12 +159,18 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     w_lo, w_hi = event.interval(0.95)
     sweep_rows = swept.table()
     metrics = {
-        "kp_nominal": spec.nominal["kp"], "ki_nominal": spec.nominal["ki"], "runs": cfg.runs,
-        "itae_mean": float(itae.mean), "itae_std": float(itae.std),
-        "itae_p50": float(itae.quantile(0.5)), "itae_p95": float(itae.quantile(0.95)),
-        "overshoot_mean": float(over.mean), "overshoot_p95": float(over.quantile(0.95)),
+        "kp_nominal": spec.nominal["kp"],
+        "ki_nominal": spec.nominal["ki"],
+        "runs": cfg.runs,
+        "itae_mean": float(itae.mean),
+        "itae_std": float(itae.std),
+        "itae_p50": float(itae.quantile(0.5)),
+        "itae_p95": float(itae.quantile(0.95)),
+        "overshoot_mean": float(over.mean),
+        "overshoot_p95": float(over.quantile(0.95)),
         "p_overshoot_exceeded": float(event.probability),
-        "p_overshoot_exceeded_wilson_low": float(w_lo), "p_overshoot_exceeded_wilson_high": float(w_hi),
+        "p_overshoot_exceeded_wilson_low": float(w_lo),
+        "p_overshoot_exceeded_wilson_high": float(w_hi),
         "best_kp_by_mean_itae": min(sweep_rows, key=lambda r: r["itae:mean"])["kp"],
         "deterministic_itae": reference,
         "engine_vs_simulate_itae_rel_diff": abs(float(exact["itae"].mean) - reference) / reference,
@@ -155,9 +181,11 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         metrics=metrics,
         tables={"nominal": [nominal_mc.row()], "kp_sweep": sweep_rows},
         figures={"distribution_nominal": plot_distribution(nominal_mc), **plot_sweep(swept)},
-        notes=[f"{cfg.runs} runs per point, RK4 at dt = controller period = {cfg.dt} s over {cfg.t_final} s; "
-               "same PRNG key at every sweep point (common random numbers)",
-               "quantiles from the log-bucket sketch: relative error ≤ 1e-3"],
+        notes=[
+            f"{cfg.runs} runs per point, RK4 at dt = controller period = {cfg.dt} s over {cfg.t_final} s; "
+            "same PRNG key at every sweep point (common random numbers)",
+            "quantiles from the log-bucket sketch: relative error ≤ 1e-3",
+        ],
     )
 
 

@@ -55,6 +55,7 @@ _TEMPORARY = re.compile(r"\.[^/]+\.tmp-\d+|" + re.escape(_PROBE) + r"[^/]+")
 
 def _listing(folder: Path) -> list[str]:
     """Every file under ``folder`` (relative, ``/``-separated; empty sub-folders as ``name/``), sorted."""
+
     def unreadable(exc: OSError) -> None:  # os.walk would skip it: a folder we cannot list is not "empty"
         raise exc
 
@@ -62,8 +63,11 @@ def _listing(folder: Path) -> list[str]:
     for root, dirs, files in os.walk(folder, onerror=unreadable):
         rel = Path(root).relative_to(folder)
         found += [(rel / f).as_posix() for f in files]
-        found += [(rel / d).as_posix() + "/" for d in dirs
-                  if os.path.islink(os.path.join(root, d)) or not os.listdir(os.path.join(root, d))]
+        found += [
+            (rel / d).as_posix() + "/"
+            for d in dirs
+            if os.path.islink(os.path.join(root, d)) or not os.listdir(os.path.join(root, d))
+        ]
     return sorted(f for f in found if f != MARKER)
 
 
@@ -109,7 +113,8 @@ def _check_owner(folder: Path, study: str, command: str) -> None:
     if marker is not None and (marker.get("command"), marker.get("study")) != (command, study):
         raise ValueError(
             f"out: {folder} holds the output of `{marker.get('command')} {marker.get('study')}`, not of "
-            f"`{command} {study}`; nothing was computed — choose another folder or delete that one")
+            f"`{command} {study}`; nothing was computed — choose another folder or delete that one"
+        )
     listed = set(marker["files"]) if marker is not None else _legacy_files(folder, study, command)
     foreign = [f for f in _listing(folder) if f not in listed and not _toolkit_file(f, command)]
     if foreign:
@@ -117,7 +122,8 @@ def _check_owner(folder: Path, study: str, command: str) -> None:
         raise ValueError(
             f"out: {folder} holds files that are not a previous output of `{command} {study}`: {shown}; "
             "refusing to overwrite or remove them, nothing was computed — choose a new or empty folder "
-            f"(a folder written by this toolkit carries {MARKER})")
+            f"(a folder written by this toolkit carries {MARKER})"
+        )
 
 
 def _probe(folder: Path) -> None:
@@ -173,8 +179,11 @@ def write_marker(folder: str | Path, study: str, command: str, files: list[str],
     from jaxsim.montecarlo.store import atomic_write_bytes  # not at import: see experiments.report
 
     folder = Path(folder)
-    previous = [n for n in ((_read_marker(folder) or {}).get("files", []))
-                if isinstance(n, str) and ".." not in Path(n).parts and not Path(n).is_absolute()]
+    previous = [
+        n
+        for n in ((_read_marker(folder) or {}).get("files", []))
+        if isinstance(n, str) and ".." not in Path(n).parts and not Path(n).is_absolute()
+    ]
     if final:
         for name in previous:
             if name not in files:
@@ -183,8 +192,7 @@ def write_marker(folder: str | Path, study: str, command: str, files: list[str],
             if "/" not in name and _TEMPORARY.fullmatch(name):
                 (folder / name).unlink(missing_ok=True)
     listed = sorted(set(files) if final else set(files) | set(previous))
-    marker = {"format": 1, "written_by": "python -m experiments", "command": command, "study": study,
-              "files": listed}
+    marker = {"format": 1, "written_by": "python -m experiments", "command": command, "study": study, "files": listed}
     atomic_write_bytes(folder / MARKER, (json.dumps(marker, indent=1) + "\n").encode())
 
 

@@ -55,31 +55,52 @@ class Config:
 
 
 ASSUMPTIONS = {
-    "loss": assumption("∫ e² + ρ u² dt, ρ = 0.01, unit step, 3 s",
-                       "the paper gives no tuning criterion for its linear PID; a smooth ISE with a "
-                       "control-effort term has a finite interior optimum, so IPOPT is well posed"),
+    "loss": assumption(
+        "∫ e² + ρ u² dt, ρ = 0.01, unit step, 3 s",
+        "the paper gives no tuning criterion for its linear PID; a smooth ISE with a "
+        "control-effort term has a finite interior optimum, so IPOPT is well posed",
+    ),
     "controller_period": assumption(
-        0.01, "a 100 Hz digital PID; the paper simulates at 1e-3 without a stated controller rate"),
+        0.01, "a 100 Hz digital PID; the paper simulates at 1e-3 without a stated controller rate"
+    ),
     "derivative_filter": assumption(0.05, "the paper's PD has no stated filter (as in linear_pid_accuracy)"),
     "gain_box": assumption("kp, ki ∈ [0, 20], kd ∈ [0, 2]", "wide enough to hold the optimum well inside"),
     "budget": assumption(3200, "simulations per tuner; equal for all but IPOPT, which stops at its tolerance"),
 }
 
 CLAIMS = [  # no paper number exists for this tuning problem: the references are independent computations
-    Claim("jax_vs_casadi_loss_rel_diff", paper=0.0, abs_tol=1e-12,
-          source="optim.casadi_pid: the same loss rebuilt in CasADi (own RK4, own PID update)"),
+    Claim(
+        "jax_vs_casadi_loss_rel_diff",
+        paper=0.0,
+        abs_tol=1e-12,
+        source="optim.casadi_pid: the same loss rebuilt in CasADi (own RK4, own PID update)",
+    ),
     Claim("jax_vs_casadi_grad_rel_diff", paper=0.0, abs_tol=1e-6, source="CasADi algorithmic differentiation"),
-    Claim("gap_to_ipopt_gradient_lbfgs", paper=0.0, abs_tol=1e-12,
-          source="IPOPT optimum of the CasADi loss (tol 1e-10)", note="quasi-Newton meets the optimum"),
+    Claim(
+        "gap_to_ipopt_gradient_lbfgs",
+        paper=0.0,
+        abs_tol=1e-12,
+        source="IPOPT optimum of the CasADi loss (tol 1e-10)",
+        note="quasi-Newton meets the optimum",
+    ),
     Claim("gradient_vs_ipopt_gain_rel_diff", paper=0.0, abs_tol=1e-3, source="IPOPT optimum (gains)"),
 ]
 
 
 def tuning_of(cfg: Config) -> PIDTuning:
     """The loop settings (shared with the CasADi rebuild)."""
-    return PIDTuning(K=cfg.K, T1=cfg.T1, T2=cfg.T2, tf=cfg.derivative_filter, ts=cfg.controller_period,
-                     substeps=cfg.substeps, t_final=cfg.t_final, rho=cfg.rho,
-                     lo=(0.0, 0.0, 0.0), hi=(cfg.kp_max, cfg.ki_max, cfg.kd_max))
+    return PIDTuning(
+        K=cfg.K,
+        T1=cfg.T1,
+        T2=cfg.T2,
+        tf=cfg.derivative_filter,
+        ts=cfg.controller_period,
+        substeps=cfg.substeps,
+        t_final=cfg.t_final,
+        rho=cfg.rho,
+        lo=(0.0, 0.0, 0.0),
+        hi=(cfg.kp_max, cfg.ki_max, cfg.kd_max),
+    )
 
 
 def problem_of(cfg: Config) -> Problem:
@@ -88,8 +109,12 @@ def problem_of(cfg: Config) -> Problem:
     lo, hi = tuning.box
     space = ParamSpace(gains=Param(lo=lo, hi=hi, init=(lo + hi) / 2, labels=GAIN_NAMES))
     objective = costs.combine(ise=costs.ise(), energy=(cfg.rho, costs.control_energy()))
-    return Problem("pid_static_plant", space, objective,
-                   lambda p, d: Scenario(tuning.closed_loop(p["gains"]), jnp.zeros(2), tuning.timing))
+    return Problem(
+        "pid_static_plant",
+        space,
+        objective,
+        lambda p, d: Scenario(tuning.closed_loop(p["gains"]), jnp.zeros(2), tuning.timing),
+    )
 
 
 def own_tuners(cfg: Config, tuning: PIDTuning) -> dict[str, Any]:
@@ -103,7 +128,9 @@ def own_tuners(cfg: Config, tuning: PIDTuning) -> dict[str, Any]:
     return {
         "gradient": None,
         "gradient_lbfgs": lambda problem, budget: tune(problem, optimizer=lbfgs, steps=budget, gtol=1e-9, patience=20),
-        "pso": None, "random": None, "grid": None,
+        "pso": None,
+        "random": None,
+        "grid": None,
         "ipopt": ipopt,
     }
 
@@ -111,10 +138,20 @@ def own_tuners(cfg: Config, tuning: PIDTuning) -> dict[str, Any]:
 def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     tuning, problem = tuning_of(cfg), problem_of(cfg)
     cmp = stages.tune_and_compare(
-        problem, cfg.budget, own_tuners(cfg, tuning), reference="ipopt", progress=progress,
-        loss_label="J = ∫ e² + ρu² dt (s)", key=jax.random.PRNGKey(cfg.seed), learning_rate=cfg.learning_rate,
-        n_starts=cfg.n_starts, n_particles=cfg.n_particles, init_spread=1.0, batch_size=128,
-        title=f"PID tuning, static plant: gap to the IPOPT optimum (budget {cfg.budget} simulations)")
+        problem,
+        cfg.budget,
+        own_tuners(cfg, tuning),
+        reference="ipopt",
+        progress=progress,
+        loss_label="J = ∫ e² + ρu² dt (s)",
+        key=jax.random.PRNGKey(cfg.seed),
+        learning_rate=cfg.learning_rate,
+        n_starts=cfg.n_starts,
+        n_particles=cfg.n_particles,
+        init_spread=1.0,
+        batch_size=128,
+        title=f"PID tuning, static plant: gap to the IPOPT optimum (budget {cfg.budget} simulations)",
+    )
     ref = np.asarray(cmp.designs["ipopt"]["gains"])
     grad = np.asarray(cmp.designs["gradient"]["gains"])
     metrics = {f"optimum_{g}": float(v) for g, v in zip(GAIN_NAMES, ref)}
@@ -127,17 +164,25 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     metrics["jax_vs_casadi_grad_rel_diff"] = float(np.max(np.abs(g_jax - g_ca)) / np.max(np.abs(g_ca)))
     metrics["budget"] = cfg.budget
     losses = {r["tuner"]: r["best_loss"] for r in cmp.tables["comparison"]}
-    steps = stages.responses(problem, cmp.designs, y_final=1.0, losses=losses,
-                             title="step responses with the tuned PID gains")
-    return stages.merge(cmp, steps, metrics=metrics, notes=[
-        "one gradient evaluation counts one simulation (its extra cost shows in the wall time); IPOPT's "
-        "count is its f + gradient evaluations", "the machine may be shared: wall times are indicative"])
+    steps = stages.responses(
+        problem, cmp.designs, y_final=1.0, losses=losses, title="step responses with the tuned PID gains"
+    )
+    return stages.merge(
+        cmp,
+        steps,
+        metrics=metrics,
+        notes=[
+            "one gradient evaluation counts one simulation (its extra cost shows in the wall time); IPOPT's "
+            "count is its f + gradient evaluations",
+            "the machine may be shared: wall times are indicative",
+        ],
+    )
 
 
 STUDY = Study(
     name="pid_tuning_comparison",
     description="PID of the fuzzy-PID paper's static plant tuned by gradient / PSO / random / grid / IPOPT "
-                "on equal budgets",
+    "on equal budgets",
     config=Config,
     presets={"quick": dict(budget=640)},
     claims=CLAIMS,

@@ -15,14 +15,30 @@ import traceback
 import experiments
 from experiments.runner import Study, as_study
 
-_INFRASTRUCTURE = {"cli", "registry", "study", "report", "progress", "config_overrides", "benchmarks",
-                   "sweep_command", "output_folder", "runner", "stages", "figures", "report_html"}
+_INFRASTRUCTURE = {
+    "cli",
+    "registry",
+    "study",
+    "report",
+    "progress",
+    "config_overrides",
+    "benchmarks",
+    "sweep_command",
+    "output_folder",
+    "runner",
+    "stages",
+    "figures",
+    "report_html",
+}
 
 
 def study_modules() -> list[str]:
     """Names of the modules that may hold a study (no import)."""
-    return sorted(m.name for m in pkgutil.iter_modules(experiments.__path__)
-                  if not m.name.startswith("_") and m.name not in _INFRASTRUCTURE)
+    return sorted(
+        m.name
+        for m in pkgutil.iter_modules(experiments.__path__)
+        if not m.name.startswith("_") and m.name not in _INFRASTRUCTURE
+    )
 
 
 def _load(module: str) -> Study | None:

@@ -41,8 +41,11 @@ def _plain(x: Any) -> Any:
 
 def report_file_names(result: StudyResult) -> list[str]:
     """Names of the files :func:`write_report` writes for ``result`` (``results.json`` first)."""
-    return (["results.json"] + [f"{name}.csv" for name, rows in result.tables.items() if rows]
-            + [f"{name}.png" for name in result.figures])
+    return (
+        ["results.json"]
+        + [f"{name}.csv" for name, rows in result.tables.items() if rows]
+        + [f"{name}.png" for name in result.figures]
+    )
 
 
 def _csv_bytes(rows: list[dict[str, Any]]) -> bytes:
@@ -57,8 +60,9 @@ def _csv_bytes(rows: list[dict[str, Any]]) -> bytes:
     return buf.getvalue().encode()
 
 
-def write_report(study_name: str, config: Any, result: StudyResult, out_dir: str | Path,
-                 extra: dict[str, Any] | None = None) -> Path:
+def write_report(
+    study_name: str, config: Any, result: StudyResult, out_dir: str | Path, extra: dict[str, Any] | None = None
+) -> Path:
     """Write everything (files named by :func:`report_file_names`); returns the path of ``results.json``.
 
     ``extra``: further top-level keys of ``results.json`` (the runner's ``preset``, ``description``

@@ -66,8 +66,14 @@ def _key_values(d: dict[str, Any], title: str) -> str:
 
 
 def _assumptions(d: dict[str, Any]) -> str:
-    rows = [{"name": k, "value": (v or {}).get("value") if isinstance(v, dict) else v,
-             "why": (v or {}).get("why", "") if isinstance(v, dict) else ""} for k, v in d.items()]
+    rows = [
+        {
+            "name": k,
+            "value": (v or {}).get("value") if isinstance(v, dict) else v,
+            "why": (v or {}).get("why", "") if isinstance(v, dict) else "",
+        }
+        for k, v in d.items()
+    ]
     table = _table(rows, ["name", "value", "why"])
     return f"<details open><summary>assumptions ({len(rows)})</summary>{table}</details>"
 
@@ -90,14 +96,18 @@ def _section(folder: Path, rel: str, res: dict[str, Any]) -> str:
     rows = res.get("reproduction") or []
     if rows:
         parts.append("<h3>reproduction</h3>")
-        parts.append(_table(rows, ["metric", "ours", "paper", "tolerance", "verdict", "source", "note"],
-                            row_class="verdict"))
+        parts.append(
+            _table(rows, ["metric", "ours", "paper", "tolerance", "verdict", "source", "note"], row_class="verdict")
+        )
     else:
         parts.append("<p><i>no claims declared</i></p>")
     pngs = sorted(folder.glob("*.png"))
     if pngs:
-        figs = "".join(f'<figure><a href="{_e(rel)}/{_e(p.name)}"><img src="{_e(rel)}/{_e(p.name)}" '
-                       f'alt="{_e(p.stem)}"></a><figcaption>{_e(p.stem)}</figcaption></figure>' for p in pngs)
+        figs = "".join(
+            f'<figure><a href="{_e(rel)}/{_e(p.name)}"><img src="{_e(rel)}/{_e(p.name)}" '
+            f'alt="{_e(p.stem)}"></a><figcaption>{_e(p.stem)}</figcaption></figure>'
+            for p in pngs
+        )
         parts.append(f"<h3>figures</h3><div>{figs}</div>")
     parts.append(_key_values(res.get("config", {}), "config"))
     parts.append(_assumptions(res.get("assumptions", {})))
@@ -127,18 +137,23 @@ def render(results_dir: str | Path) -> str:
     for folder, res in studies:
         rel = folder.relative_to(root).as_posix()
         counts = _verdicts(res.get("reproduction") or [])
-        summary.append({"study": res.get("study", folder.name), "preset": res.get("preset", "?"), **counts,
-                        "_anchor": rel})
+        summary.append(
+            {"study": res.get("study", folder.name), "preset": res.get("preset", "?"), **counts, "_anchor": rel}
+        )
     head = "".join(f"<th>{_e(c)}</th>" for c in ("study", "preset", "reproduced", "differs", "not computed"))
     rows = "".join(
         f'<tr><td><a href="#{_e(s["_anchor"])}">{_e(s["study"])}</a></td><td>{_e(s["preset"])}</td>'
         f'<td class="num reproduced">{s["reproduced"]}</td><td class="num differs">{s["differs"]}</td>'
-        f'<td class="num not-computed">{s["not computed"]}</td></tr>' for s in summary)
+        f'<td class="num not-computed">{s["not computed"]}</td></tr>'
+        for s in summary
+    )
     sections = "\n".join(_section(folder, folder.relative_to(root).as_posix(), res) for folder, res in studies)
     empty = "" if studies else f"<p>No study results found under {_e(root)} (expected */results.json).</p>"
-    return (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>jaxsim studies</title>"
-            f"<style>{_STYLE}</style></head><body>\n<h1>Studies: paper vs ours</h1>\n{empty}"
-            f"<table><tr>{head}</tr>{rows}</table>\n{sections}\n</body></html>\n")
+    return (
+        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>jaxsim studies</title>'
+        f"<style>{_STYLE}</style></head><body>\n<h1>Studies: paper vs ours</h1>\n{empty}"
+        f"<table><tr>{head}</tr>{rows}</table>\n{sections}\n</body></html>\n"
+    )
 
 
 def write_html_report(results_dir: str | Path) -> Path:

@@ -98,8 +98,15 @@ class Claim:
     def row(self, metrics: dict[str, Any]) -> dict[str, Any]:
         value = metrics.get(self.metric)
         ours = None if value is None else float(value)
-        return {"metric": self.metric, "ours": ours, "paper": float(self.paper), "tolerance": self.tolerance,
-                "verdict": self.verdict(ours), "source": self.source, "note": self.note}
+        return {
+            "metric": self.metric,
+            "ours": ours,
+            "paper": float(self.paper),
+            "tolerance": self.tolerance,
+            "verdict": self.verdict(ours),
+            "source": self.source,
+            "note": self.note,
+        }
 
 
 def check_claims(claims: Sequence[Claim], metrics: dict[str, Any]) -> list[dict[str, Any]]:
@@ -133,8 +140,9 @@ class Study:
         for preset, values in self.presets.items():
             unknown = sorted(set(values) - names)
             if unknown:
-                raise ValueError(f"study {self.name!r}: preset {preset!r} sets unknown config field(s) "
-                                 f"{', '.join(unknown)}")
+                raise ValueError(
+                    f"study {self.name!r}: preset {preset!r} sets unknown config field(s) {', '.join(unknown)}"
+                )
         for c in self.claims:
             if not isinstance(c, Claim):
                 raise ValueError(f"study {self.name!r}: claims must be Claim objects, got {type(c).__name__}")
@@ -147,8 +155,9 @@ class Study:
         """``(preset name, config)``: the preset over the defaults, then ``key=value`` overrides."""
         preset = "full" if preset is None else preset
         if preset not in self.preset_names:
-            raise ValueError(f"--preset {preset}: unknown preset of study {self.name!r}; known: "
-                             f"{', '.join(self.preset_names)}")
+            raise ValueError(
+                f"--preset {preset}: unknown preset of study {self.name!r}; known: {', '.join(self.preset_names)}"
+            )
         config = self.config()
         if preset != "full":
             config = dataclasses.replace(config, **self.presets[preset])
@@ -183,6 +192,13 @@ def as_study(study: Study | LegacyStudy) -> Study:
     if isinstance(study, LegacyStudy):
         names = {f.name for f in dataclasses.fields(study.config_cls)}
         presets = {"quick": {"quick": True}} if "quick" in names else {}
-        return Study(name=study.name, description=study.description, config=study.config_cls, run=study.run,
-                     presets=presets, per_run=study.per_run, legacy=True)
+        return Study(
+            name=study.name,
+            description=study.description,
+            config=study.config_cls,
+            run=study.run,
+            presets=presets,
+            per_run=study.per_run,
+            legacy=True,
+        )
     raise ValueError(f"STUDY: expected an experiments.runner.Study, got {type(study).__name__}")

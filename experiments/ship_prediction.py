@@ -50,8 +50,13 @@ class Config:
 PRESETS = {"quick": dict(t_final=60.0, n_noise_runs=8, n_lti_systems=20)}
 SOURCE = "seed 000 paper 6, §6.2 (spec lines 621–623)"
 CLAIMS = [
-    Claim("pred_err_noise_free", paper=1e-4, band=(0.0, 1e-4), source=SOURCE + ": errors below the 4th decimal place",
-          note="the 3-DOF substitute vessel, noise-free"),
+    Claim(
+        "pred_err_noise_free",
+        paper=1e-4,
+        band=(0.0, 1e-4),
+        source=SOURCE + ": errors below the 4th decimal place",
+        note="the 3-DOF substitute vessel, noise-free",
+    ),
     Claim("hankel_rank_vessel", paper=7.0, band=(0.0, 7.0), source=SOURCE + ": Hankel rank ≤ 7"),
     Claim("lti_max_abs_error", paper=0.0, abs_tol=1e-8, source="closed-form y_k = C A^k x0 of random LTI systems"),
 ]
@@ -59,24 +64,33 @@ CLAIMS = [
 ASSUMPTIONS = {
     "vessel_model": assumption(
         "linear Mariner 3-DOF (Chislett & Strøm-Tejsen 1965 derivatives, Fossen MSS mariner.m)",
-        "the paper's full nonlinear 6-DOF landing-vessel model (its ref. [31]) and its parameters are not given"),
+        "the paper's full nonlinear 6-DOF landing-vessel model (its ref. [31]) and its parameters are not given",
+    ),
     "manoeuvre": assumption(
         "rudder 15° sin(2πt/40 s) + 5° step at 20 s; +1 m/s speed command at 10 s",
-        "the paper's control signals (Fig. 4) are curves only; steps and sinusoids are 'linearisable' inputs"),
-    "rank_tol": assumption(1e-8, "SVD threshold of the null space (relative to σ_max) for the vessel; not stated "
-                                 "in the paper; tighter thresholds pick up the kinematic nonlinearity (table null_space_choice)"),
+        "the paper's control signals (Fig. 4) are curves only; steps and sinusoids are 'linearisable' inputs",
+    ),
+    "rank_tol": assumption(
+        1e-8,
+        "SVD threshold of the null space (relative to σ_max) for the vessel; not stated "
+        "in the paper; tighter thresholds pick up the kinematic nonlinearity (table null_space_choice)",
+    ),
     "lti_rank_tol": assumption(1e-10, "threshold for the exactly low-rank random LTI data (the predictor's default)"),
-    "noisy_rank": assumption("the noise-free numerical rank",
-                             "with noise nothing is exactly null; the rank is fixed to the noise-free one"),
+    "noisy_rank": assumption(
+        "the noise-free numerical rank", "with noise nothing is exactly null; the rank is fixed to the noise-free one"
+    ),
     "noise_std": assumption(1e-4, "the issue's level; the paper's data are noise-free"),
-    "error_measure": assumption("max |ŷ − y| over time and coordinates (m for x, y; rad for ψ)",
-                                "the paper states errors 'do not exceed the 4th decimal place in all coordinates'"),
+    "error_measure": assumption(
+        "max |ŷ − y| over time and coordinates (m for x, y; rad for ψ)",
+        "the paper states errors 'do not exceed the 4th decimal place in all coordinates'",
+    ),
 }
 
 
 def controls(cfg: Config, t: jax.Array) -> jax.Array:
-    rudder = (jnp.deg2rad(cfg.rudder_amplitude_deg) * jnp.sin(2 * jnp.pi * t / cfg.rudder_period)
-              + jnp.deg2rad(cfg.rudder_step_deg) * (t >= cfg.rudder_step_time))
+    rudder = jnp.deg2rad(cfg.rudder_amplitude_deg) * jnp.sin(2 * jnp.pi * t / cfg.rudder_period) + jnp.deg2rad(
+        cfg.rudder_step_deg
+    ) * (t >= cfg.rudder_step_time)
     return jnp.stack([rudder, cfg.speed_step * (t >= cfg.speed_step_time)])
 
 
@@ -85,8 +99,9 @@ def simulate_vessel(cfg: Config, t_final: float) -> tuple[np.ndarray, np.ndarray
     p = ship_3dof.ShipParams()
     every = int(round(cfg.sample_period / cfg.sim_dt))
     n = int(round(t_final / cfg.sim_dt))
-    ts, xs = integrate(lambda t, x: ship_3dof.dynamics(p, x, controls(cfg, t), t), jnp.zeros(7), 0.0,
-                       cfg.sim_dt, n, RK4)
+    ts, xs = integrate(
+        lambda t, x: ship_3dof.dynamics(p, x, controls(cfg, t), t), jnp.zeros(7), 0.0, cfg.sim_dt, n, RK4
+    )
     ts, xs = ts[::every], xs[::every]
     return np.asarray(ts), np.asarray(xs[:, :3]), np.asarray(jax.vmap(lambda t: controls(cfg, t))(ts))
 
@@ -123,14 +138,20 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     for i in progress(range(n_lti), desc="random LTI systems", unit="system"):
         ys, n, p = random_lti(rng, cfg.sample_period, 3 * warm)
         pred = np.asarray(hp.predict_series(jnp.asarray(ys), cfg.window, cfg.nu, cfg.lti_rank_tol))
-        lti_rows.append({"system": i, "order": n, "outputs": p,
-                         "hankel_rank": hp.numerical_rank(ys, cfg.window, cfg.nu, cfg.lti_rank_tol),
-                         "max_abs_error": float(np.nanmax(np.abs(pred - ys)))})
+        lti_rows.append(
+            {
+                "system": i,
+                "order": n,
+                "outputs": p,
+                "hankel_rank": hp.numerical_rank(ys, cfg.window, cfg.nu, cfg.lti_rank_tol),
+                "max_abs_error": float(np.nanmax(np.abs(pred - ys))),
+            }
+        )
 
     t, y, u = simulate_vessel(cfg, t_final)
     pred = np.asarray(predict(jnp.asarray(y)))
     err = np.abs(pred - y)[warm:]
-    rank = hp.numerical_rank(y[len(y) // 2:], cfg.window, cfg.nu, cfg.rank_tol)
+    rank = hp.numerical_rank(y[len(y) // 2 :], cfg.window, cfg.nu, cfg.rank_tol)
 
     keys = jax.random.split(jax.random.PRNGKey(cfg.seed), n_noise)
     noisy = jnp.asarray(y)[None] + cfg.noise_std * jax.vmap(lambda k: jax.random.normal(k, y.shape))(keys)
@@ -142,13 +163,25 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     for tol in (1e-12, 1e-10, 1e-8, 1e-6, 1e-4):
         e0 = np.abs(np.asarray(hp.predict_series(jnp.asarray(y), cfg.window, cfg.nu, tol)) - y)[warm:]
         e1 = np.abs(np.asarray(hp.predict_series(noisy[0], cfg.window, cfg.nu, tol)) - y)[warm:]
-        scan_rows.append({"null_space": f"rank_tol={tol:g}", "max_err_noise_free": float(e0.max()),
-                          "max_err_noisy": float(e1.max()), "median_err_noisy": float(np.median(e1))})
+        scan_rows.append(
+            {
+                "null_space": f"rank_tol={tol:g}",
+                "max_err_noise_free": float(e0.max()),
+                "max_err_noisy": float(e1.max()),
+                "median_err_noisy": float(np.median(e1)),
+            }
+        )
     for r in range(1, min(cfg.window, 7) + 1):
         e0 = np.abs(np.asarray(hp.predict_series(jnp.asarray(y), cfg.window, cfg.nu, rank=r)) - y)[warm:]
         e1 = np.abs(np.asarray(hp.predict_series(noisy[0], cfg.window, cfg.nu, rank=r)) - y)[warm:]
-        scan_rows.append({"null_space": f"rank={r}", "max_err_noise_free": float(e0.max()),
-                          "max_err_noisy": float(e1.max()), "median_err_noisy": float(np.median(e1))})
+        scan_rows.append(
+            {
+                "null_space": f"rank={r}",
+                "max_err_noise_free": float(e0.max()),
+                "max_err_noisy": float(e1.max()),
+                "median_err_noisy": float(np.median(e1)),
+            }
+        )
 
     metrics = {
         "pred_err_noise_free": float(err.max()),
@@ -169,23 +202,47 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         f"detected Hankel rank {rank} (paper: ≤ 7)",
         f"the predictor needs window + ν + 1 = {warm} samples ({warm * cfg.sample_period:.2f} s) before its first "
         "prediction; the paper's '10 measurements, 0.5 s' counts rank + ν + 1 with its rank 7",
-        f"noise σ = {cfg.noise_std:g}: median over {n_noise} runs of the max error {metrics['pred_err_noise_1e-4']:.2e}",
+        f"noise σ = {cfg.noise_std:g}: median over {n_noise} runs of the max error "
+        f"{metrics['pred_err_noise_1e-4']:.2e}",
     ]
-    tables = {"random_lti": lti_rows, "null_space_choice": scan_rows,
-              "noise_runs": [{"run": i, "max_abs_error": float(v)} for i, v in enumerate(per_run_max)]}
+    tables = {
+        "random_lti": lti_rows,
+        "null_space_choice": scan_rows,
+        "noise_runs": [{"run": i, "max_abs_error": float(v)} for i, v in enumerate(per_run_max)],
+    }
     deg = np.rad2deg
-    manoeuvre = figures.line_panels([
-        {"lines": {"track": (y[:, 1], y[:, 0])}, "x_label": "east y, m", "y_label": "north x, m", "title": "track"},
-        {"lines": {"heading": (t, deg(y[:, 2]))}, "x_label": "t, s", "y_label": "heading ψ, deg"},
-        {"lines": {"rudder command, deg": (t, deg(u[:, 0])), "speed command, m/s": (t, u[:, 1])},
-         "x_label": "t, s", "y_label": "command"}], size=(4.7, 4))
-    errors = figures.line_panels([
-        {"lines": {name: (t[warm:], np.maximum(e[:, j], 1e-16)) for j, name in enumerate(("x, m", "y, m", "ψ, rad"))},
-         "x_label": "t, s", "y_label": "|ŷ − y|", "log_y": True, "hline": 1e-4,
-         "title": f"one-step prediction error, {title} (black: paper's 1e-4)"}
-        for e, title in ((err, "noise-free"), (err_n[0], f"noise σ = {cfg.noise_std:g} (one run)"))])
-    return stages.merge(stages.Stage(tables=tables, figures={"manoeuvre": manoeuvre, "prediction_errors": errors}),
-                        metrics=metrics, notes=notes)
+    manoeuvre = figures.line_panels(
+        [
+            {"lines": {"track": (y[:, 1], y[:, 0])}, "x_label": "east y, m", "y_label": "north x, m", "title": "track"},
+            {"lines": {"heading": (t, deg(y[:, 2]))}, "x_label": "t, s", "y_label": "heading ψ, deg"},
+            {
+                "lines": {"rudder command, deg": (t, deg(u[:, 0])), "speed command, m/s": (t, u[:, 1])},
+                "x_label": "t, s",
+                "y_label": "command",
+            },
+        ],
+        size=(4.7, 4),
+    )
+    errors = figures.line_panels(
+        [
+            {
+                "lines": {
+                    name: (t[warm:], np.maximum(e[:, j], 1e-16)) for j, name in enumerate(("x, m", "y, m", "ψ, rad"))
+                },
+                "x_label": "t, s",
+                "y_label": "|ŷ − y|",
+                "log_y": True,
+                "hline": 1e-4,
+                "title": f"one-step prediction error, {title} (black: paper's 1e-4)",
+            }
+            for e, title in ((err, "noise-free"), (err_n[0], f"noise σ = {cfg.noise_std:g} (one run)"))
+        ]
+    )
+    return stages.merge(
+        stages.Stage(tables=tables, figures={"manoeuvre": manoeuvre, "prediction_errors": errors}),
+        metrics=metrics,
+        notes=notes,
+    )
 
 
 STUDY = Study(

@@ -30,13 +30,24 @@ from jaxsim.core.rollout import Timing, simulate
 from jaxsim.estimation import reduced_order_smo as smo
 from jaxsim.plants import servo_drive as sd
 from jaxsim.problem import Param, ParamSpace, Problem
-from jaxsim.problem.servo_fault import SPREAD_FIELDS, FaultSetup, error_stats, observer, perturbed, position_loop, run_once
+from jaxsim.problem.servo_fault import (
+    SPREAD_FIELDS,
+    FaultSetup,
+    error_stats,
+    observer,
+    perturbed,
+    position_loop,
+    run_once,
+)
 from optim.reparam import Positive
 
 PAPER_CLAIM = 0.0035  # seed 000 paper 2, line 1931: "does not exceed 0.35 % of the identified value"
 MC_CASES = {  # name -> (noise level index or None, with the parameter spread)
-    "noise level 1": (0, False), "noise level 2": (1, False),
-    "parameter spread": (None, True), "noise level 1 + spread": (0, True)}
+    "noise level 1": (0, False),
+    "noise level 2": (1, False),
+    "parameter spread": (None, True),
+    "noise level 1 + spread": (0, True),
+}
 
 
 @dataclass(frozen=True)
@@ -58,46 +69,72 @@ class Config(FaultSetup):  # + the observer gains, switching and error statistic
     seed: int = 0
 
 
-PRESETS = {"quick": dict(t_final=4.0, sample_period=5e-5, reference_step_ratio=5, reference_t_final=3.6,
-                         mc_cases=("noise level 2", "parameter spread"), mc_samples=3, tune_steps=3, tune_window=0.9)}
+PRESETS = {
+    "quick": dict(
+        t_final=4.0,
+        sample_period=5e-5,
+        reference_step_ratio=5,
+        reference_t_final=3.6,
+        mc_cases=("noise level 2", "parameter spread"),
+        mc_samples=3,
+        tune_steps=3,
+        tune_window=0.9,
+    )
+}
 SOURCE = "seed 000 paper 2, line 1931 (spec §2.4): max identification error after the fault ≤ 0.35 % of M̃"
 CLAIMS = [
-    *(Claim(m, paper=PAPER_CLAIM, band=(0.0, PAPER_CLAIM), source=SOURCE, note=n) for m, n in (
-        ("ident_err_rel_median", ""), ("ident_err_rel_p99", ""),
-        ("ident_err_rel_max_after_3s_excl_switching", "away from the speed reversals, where M̃ jumps by 0.02 N·m"),
-        ("ident_err_rel_max_after_3s", "may differ: no continuous observer follows M̃'s jump at a speed reversal"))),
-    Claim("ident_bias_theory", paper=1 / 1001, rel_tol=1e-12,
-          source="sliding-mode bias 1/(1 + k1/k3) with the paper's k1 = 1e7, k3 = 1e4 (spec §2.3)"),
+    *(
+        Claim(m, paper=PAPER_CLAIM, band=(0.0, PAPER_CLAIM), source=SOURCE, note=n)
+        for m, n in (
+            ("ident_err_rel_median", ""),
+            ("ident_err_rel_p99", ""),
+            ("ident_err_rel_max_after_3s_excl_switching", "away from the speed reversals, where M̃ jumps by 0.02 N·m"),
+            ("ident_err_rel_max_after_3s", "may differ: no continuous observer follows M̃'s jump at a speed reversal"),
+        )
+    ),
+    Claim(
+        "ident_bias_theory",
+        paper=1 / 1001,
+        rel_tol=1e-12,
+        source="sliding-mode bias 1/(1 + k1/k3) with the paper's k1 = 1e7, k3 = 1e4 (spec §2.3)",
+    ),
 ]
 
 ASSUMPTIONS = {
     "drive_equations": assumption(
         "eq. (4.1) rebuilt as in spec §2.2 (standard drive model of the authors' group)",
         "the display equation is lost in the extraction; the companion paper (Zuev et al., Sensors 2022, "
-        "22(1), 317) was searched for but its body text was not available, only its abstract"),
+        "22(1), 317) was searched for but its body text was not available, only its abstract",
+    ),
     "arm_coupling": assumption(
         "H* = M22(q3), h* = Ḣ*, M* = M23 q̈3 + ∂M23/∂q3 q̇3² − ½∂M11/∂q2 q̇1² + ∂V/∂q2 of an RRR arm",
         "the coupling equations of ref. [22] are lost; derived from the Lagrangian with the paper's link "
-        "parameters (tested against an independent forward-kinematics Lagrangian)"),
+        "parameters (tested against an independent forward-kinematics Lagrangian)",
+    ),
     "sensors": assumption("angle x1 and current x3", "the only set consistent with k = 2, N* = 0, M* = 2"),
     "reduced_model": assumption("x*2 = x2/i_r + φ(t) x3, φ = −a L_m/(i_r k_ω)", "spec §2.3 [ours]"),
     "self_tuning_device": assumption("none", "not described in the paper"),
-    "pid": assumption("U = kp e + ki ∫e + kd D, D = s/(1e-3 s + 1) e, no voltage limit",
-                      "the paper gives only the gains (10, 0.5, 1); a 1 ms derivative filter tames noise"),
+    "pid": assumption(
+        "U = kp e + ki ∫e + kd D, D = s/(1e-3 s + 1) e, no voltage limit",
+        "the paper gives only the gains (10, 0.5, 1); a 1 ms derivative filter tames noise",
+    ),
     "initial_state": assumption("at rest at q2 = 0 with the holding current; observer ẑ2(0) = 0", "not stated"),
     "sample_period": assumption(1e-5, "integration step and ε are not given; 100 kHz sampling"),
     "width": assumption(1e-3, "ε of v_eq = e1/(|e1| + ε) is not given"),
     "fault_bound": assumption(0.5, "β for the existence check: about twice the largest |M̃| of the scenario"),
     "error_normalisation": assumption("max |M̃| after the fault", "the paper does not define its 0.35 %"),
     "settle": assumption(0.05, "seconds after the onset before errors count (observer time constant ≈ 1 ms)"),
-    "noise_levels": assumption("angle 1e-9 / 1e-8 rad, current 1e-4 / 1e-3 A",
-                               "the paper is noise-free; these levels show where the identification breaks"),
+    "noise_levels": assumption(
+        "angle 1e-9 / 1e-8 rad, current 1e-4 / 1e-3 A",
+        "the paper is noise-free; these levels show where the identification breaks",
+    ),
     "parameter_spread": assumption(0.01, "relative std of R_m, L_m, k_ω, k_m, J, k_y in the plant; observer nominal"),
 }
 
 
-def stats_row(cfg: Config, par: smo.SMOParams, plant: sd.ServoParams, noise: Any, key: jax.Array, ts: float,
-              t_final: float) -> tuple[dict[str, float], dict[str, np.ndarray]]:
+def stats_row(
+    cfg: Config, par: smo.SMOParams, plant: sd.ServoParams, noise: Any, key: jax.Array, ts: float, t_final: float
+) -> tuple[dict[str, float], dict[str, np.ndarray]]:
     """``ident_err_rel_*`` of one run, and its series."""
     s = jax.jit(lambda p, k: run_once(cfg, p, plant, jnp.asarray(noise, float), k, ts, t_final))(par, key)
     s = {k: np.asarray(v) for k, v in s.items()}
@@ -106,6 +143,7 @@ def stats_row(cfg: Config, par: smo.SMOParams, plant: sd.ServoParams, noise: Any
 
 
 # --- Monte Carlo --------------------------------------------------------------------------------
+
 
 def monte_carlo(cfg: Config, par: smo.SMOParams, progress: Callable[..., Any]) -> list[dict[str, Any]]:
     """``mc_samples`` runs of each case of ``mc_cases``; case ``i`` draws from ``fold_in(key, i)``."""
@@ -124,13 +162,22 @@ def monte_carlo(cfg: Config, par: smo.SMOParams, progress: Callable[..., Any]) -
         k_scale, k_noise = jax.random.split(jax.random.fold_in(key, ci))
         scales = 1.0 + spread * jax.random.normal(k_scale, (n, len(SPREAD_FIELDS)))
         out = batched(scales, jnp.broadcast_to(jnp.asarray(noise), (n, 2)), jax.random.split(k_noise, n))
-        rows += [{"case": name, "angle_noise_rad": noise[0], "current_noise_A": noise[1], "parameter_spread": spread,
-                  "sample": i, **{f"ident_err_rel_{k}": float(v[i]) for k, v in out.items() if k != "scale"}}
-                 for i in range(n)]
+        rows += [
+            {
+                "case": name,
+                "angle_noise_rad": noise[0],
+                "current_noise_A": noise[1],
+                "parameter_spread": spread,
+                "sample": i,
+                **{f"ident_err_rel_{k}": float(v[i]) for k, v in out.items() if k != "scale"},
+            }
+            for i in range(n)
+        ]
     return rows
 
 
 # --- tuning -------------------------------------------------------------------------------------
+
 
 def tuning_problem(cfg: Config) -> Problem:
     """``(k1, k3, τ)`` of the smooth surrogate with an equivalent-injection filter: mean-square
@@ -156,24 +203,35 @@ def tuning_problem(cfg: Config) -> Problem:
 
         def one(t_, y_, u_, m):
             m_hat = jax.vmap(sd.fault_torque_from_estimate, (None, 0, 0))(
-                sd.ServoParams(), t_, smo.smo_filter(par, t_, y_, u_).d_hat)
+                sd.ServoParams(), t_, smo.smo_filter(par, t_, y_, u_).d_hat
+            )
             return jnp.sum(jnp.where(window, ((m_hat - m) / scale) ** 2, 0.0)) / jnp.sum(window)
 
         return jnp.mean(jax.vmap(one)(t, y, u, m_true))
 
-    space = ParamSpace(theta=Param(lo=(1e5, 1e2, 1e-6), hi=(1e9, 1e6, 1e-2), init=(cfg.k1, cfg.k3, 1e-4), log=True,
-                                   labels=("k1", "k3", "filter_tau"), reparam=Positive(method="exp")))
+    space = ParamSpace(
+        theta=Param(
+            lo=(1e5, 1e2, 1e-6),
+            hi=(1e9, 1e6, 1e-2),
+            init=(cfg.k1, cfg.k3, 1e-4),
+            log=True,
+            labels=("k1", "k3", "filter_tau"),
+            reparam=Positive(method="exp"),
+        )
+    )
     return Problem.from_loss("smo_gains", space, loss)
 
 
 # --- the study ----------------------------------------------------------------------------------
 
+
 def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     ts, t_final = cfg.sample_period, cfg.t_final
     nominal, zero, key = sd.ServoParams(), (0.0, 0.0), jax.random.PRNGKey(cfg.seed)
     exact = observer(cfg)
-    margins = smo.sliding_existence(exact.model, exact.gains, exact.P, 2 * jnp.eye(1),
-                                    sd.sliding_bounds(nominal, cfg.fault_bound))
+    margins = smo.sliding_existence(
+        exact.model, exact.gains, exact.P, 2 * jnp.eye(1), sd.sliding_bounds(nominal, cfg.fault_bound)
+    )
     try:
         observer(cfg, gains=smo.SMOGains(k1=1.0, k2=1.0, k3=1.0))
         rejected = 0.0
@@ -181,50 +239,93 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         rejected = 1.0
 
     ts_ref = ts / cfg.reference_step_ratio
-    runs = [("exact switching (implicit), sample period", exact, ts, t_final),
-            ("smooth surrogate, semi-implicit Euler", observer(cfg, scheme="smooth"), ts, t_final),
-            ("exact switching reference, step/10", exact, ts_ref, cfg.reference_t_final)]
+    runs = [
+        ("exact switching (implicit), sample period", exact, ts, t_final),
+        ("smooth surrogate, semi-implicit Euler", observer(cfg, scheme="smooth"), ts, t_final),
+        ("exact switching reference, step/10", exact, ts_ref, cfg.reference_t_final),
+    ]
     integ = []
     for name, par, step, horizon in progress(runs, desc="nominal runs", unit="run"):
         st, s = stats_row(cfg, par, nominal, zero, key, step, horizon)
         if not integ:
             series, scale = s, st["scale"]  # the main run: figure, and the RK4 run's error scale
-        integ.append({"integration": name, "step_s": step, "horizon_s": float(s["t"][-1] + step),
-                      **{k: v for k, v in st.items() if k != "scale"}})
+        integ.append(
+            {
+                "integration": name,
+                "step_s": step,
+                "horizon_s": float(s["t"][-1] + step),
+                **{k: v for k, v in st.items() if k != "scale"},
+            }
+        )
     rk4_err = _rk4_failure(cfg, observer(cfg, scheme="smooth", solver=RK4), key, scale)
-    integ.append({"integration": "smooth surrogate, explicit RK4", "step_s": ts, "horizon_s": 3.3,
-                  "ident_err_rel_max": rk4_err})
+    integ.append(
+        {"integration": "smooth surrogate, explicit RK4", "step_s": ts, "horizon_s": 3.3, "ident_err_rel_max": rk4_err}
+    )
     mc_rows = monte_carlo(cfg, exact, progress)
 
-    tuning = stages.gradient_tuning(tuning_problem(cfg), steps=cfg.tune_steps, mode="forward",
-                                    optimizer=optax.adam(cfg.tune_learning_rate), progress=progress,
-                                    loss_label="mean-square relative error (smooth surrogate, noisy)")
+    tuning = stages.gradient_tuning(
+        tuning_problem(cfg),
+        steps=cfg.tune_steps,
+        mode="forward",
+        optimizer=optax.adam(cfg.tune_learning_rate),
+        progress=progress,
+        loss_label="mean-square relative error (smooth surrogate, noisy)",
+    )
     k1, k3, tau = (float(v) for v in tuning.result.params["theta"])
     noise = (cfg.angle_noise[cfg.tune_noise_level], cfg.current_noise[cfg.tune_noise_level])
     evaluation = []
     for label, par in (("paper gains", exact), ("tuned", observer(cfg, smo.SMOGains(k1, cfg.k2, k3), filter_tau=tau))):
-        stats = [stats_row(cfg, par, nominal, noise, jax.random.PRNGKey(cfg.seed + 100 + i), ts, t_final)[0]
-                 for i in range(2)]  # fresh noise, not seen by the tuner
-        evaluation.append({"gains": label, "k1": float(par.gains.k1), "k3": float(par.gains.k3),
-                           "filter_tau": float(par.filter_tau), **{
-                               k: float(np.mean([st[k] for st in stats])) for k in
-                               ("ident_err_rel_median", "ident_err_rel_p99", "ident_err_rel_max",
-                                "ident_err_rel_max_excl_switching")}})
+        stats = [
+            stats_row(cfg, par, nominal, noise, jax.random.PRNGKey(cfg.seed + 100 + i), ts, t_final)[0]
+            for i in range(2)
+        ]  # fresh noise, not seen by the tuner
+        evaluation.append(
+            {
+                "gains": label,
+                "k1": float(par.gains.k1),
+                "k3": float(par.gains.k3),
+                "filter_tau": float(par.filter_tau),
+                **{
+                    k: float(np.mean([st[k] for st in stats]))
+                    for k in (
+                        "ident_err_rel_median",
+                        "ident_err_rel_p99",
+                        "ident_err_rel_max",
+                        "ident_err_rel_max_excl_switching",
+                    )
+                },
+            }
+        )
 
     main, rho = integ[0], cfg.k1 / cfg.k3
-    metrics = {f"{k}_after_3s" if k in ("ident_err_rel_max", "ident_err_rel_max_excl_switching") else k: v
-               for k, v in main.items() if k.startswith("ident_err_rel_")}
+    metrics = {
+        f"{k}_after_3s" if k in ("ident_err_rel_max", "ident_err_rel_max_excl_switching") else k: v
+        for k, v in main.items()
+        if k.startswith("ident_err_rel_")
+    }
     metrics["ident_err_rel_max_after_3s_excl_switching"] = metrics.pop("ident_err_rel_max_excl_switching_after_3s")
     metrics |= {
-        "ident_bias_theory": 1.0 / (1.0 + rho), "paper_claim_rel": PAPER_CLAIM,
+        "ident_bias_theory": 1.0 / (1.0 + rho),
+        "paper_claim_rel": PAPER_CLAIM,
         "within_claim_p99": float(main["ident_err_rel_p99"] <= PAPER_CLAIM),
         "within_claim_max": float(main["ident_err_rel_max"] <= PAPER_CLAIM),
-        **{f"{tag}_ident_err_rel_{q}": integ[i][f"ident_err_rel_{q}"]
-           for i, tag in ((2, "reference"), (1, "smooth")) for q in ("median", "p99")},
-        "explicit_rk4_ident_err_rel_max": rk4_err, "sliding_delta": margins.delta, "sliding_k3_min": margins.k3_min,
-        "unreachable_gains_rejected": rejected, "tuned_k1": k1, "tuned_k3": k3, "tuned_filter_tau": tau,
-        **{f"noisy_{tag}_ident_err_rel_{q}": ev[f"ident_err_rel_{q}"]
-           for q in ("median", "p99") for tag, ev in zip(("paper_gains", "tuned"), evaluation)},
+        **{
+            f"{tag}_ident_err_rel_{q}": integ[i][f"ident_err_rel_{q}"]
+            for i, tag in ((2, "reference"), (1, "smooth"))
+            for q in ("median", "p99")
+        },
+        "explicit_rk4_ident_err_rel_max": rk4_err,
+        "sliding_delta": margins.delta,
+        "sliding_k3_min": margins.k3_min,
+        "unreachable_gains_rejected": rejected,
+        "tuned_k1": k1,
+        "tuned_k3": k3,
+        "tuned_filter_tau": tau,
+        **{
+            f"noisy_{tag}_ident_err_rel_{q}": ev[f"ident_err_rel_{q}"]
+            for q in ("median", "p99")
+            for tag, ev in zip(("paper_gains", "tuned"), evaluation)
+        },
     }
     for name in cfg.mc_cases:
         tag = name.replace(" + ", "_").replace(" ", "_")
@@ -246,10 +347,17 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         "costs percent-level errors without the equivalent-injection filter",
     ]
     groups = {c: [r["ident_err_rel_median"] for r in mc_rows if r["case"] == c] for c in cfg.mc_cases}
-    mc_fig = figures.box_by_group(groups, y_label="median relative identification error", log=True,
-                                  reference=PAPER_CLAIM, reference_label="paper: 0.35 %")
-    own = stages.Stage(tables={"integration": integ, "monte_carlo": mc_rows, "tuned_vs_paper_under_noise": evaluation},
-                       figures={"identification": _plot_identification(series, ts), "monte_carlo": mc_fig})
+    mc_fig = figures.box_by_group(
+        groups,
+        y_label="median relative identification error",
+        log=True,
+        reference=PAPER_CLAIM,
+        reference_label="paper: 0.35 %",
+    )
+    own = stages.Stage(
+        tables={"integration": integ, "monte_carlo": mc_rows, "tuned_vs_paper_under_noise": evaluation},
+        figures={"identification": _plot_identification(series, ts), "monte_carlo": mc_fig},
+    )
     return stages.merge(own, tuning, metrics=metrics, notes=notes)
 
 
@@ -257,7 +365,7 @@ def _rk4_failure(cfg: Config, rk4: smo.SMOParams, key: jax.Array, scale: float) 
     """Max error (relative to ``scale``) of the smooth surrogate under explicit RK4 on [0.5, 3.3] s."""
     ts = cfg.sample_period
     s = jax.jit(lambda p, k: run_once(cfg, p, sd.ServoParams(), jnp.zeros(2), k, ts, 3.3))(rk4, key)
-    err = np.abs(np.asarray(s["M_hat"]) - np.asarray(s["M"]))[int(0.5 / ts):]
+    err = np.abs(np.asarray(s["M_hat"]) - np.asarray(s["M"]))[int(0.5 / ts) :]
     return float(np.nanmax(err) / scale) if np.all(np.isfinite(err)) else float("inf")
 
 
@@ -269,8 +377,12 @@ def _plot_identification(s: dict[str, np.ndarray], ts: float):
     fig, axes = plt.subplots(3, 1, figsize=(10, 9))
     axes[0].plot(t, M, lw=1.5, label="M̃(t) (true)")
     axes[0].plot(t, Mh, "--", lw=1.0, label="observer estimate")
-    axes[0].set(ylabel="M̃, N·m", ylim=(-0.35, 0.35), xlabel="t, s",
-                title="fault torque and its sliding-mode estimate (exact switching, paper gains)")
+    axes[0].set(
+        ylabel="M̃, N·m",
+        ylim=(-0.35, 0.35),
+        xlabel="t, s",
+        title="fault torque and its sliding-mode estimate (exact switching, paper gains)",
+    )
     rel = np.abs(Mh - M) / np.max(np.abs(M[after]))
     axes[1].semilogy(t[after], np.maximum(rel[after], 1e-8), lw=0.6, label="|M̃̂ − M̃| / max|M̃|")
     axes[1].axhline(PAPER_CLAIM, color="r", ls="--", label="paper: 0.35 %")

@@ -57,10 +57,19 @@ class ComparisonStage(Stage):
     designs: dict[str, Any] = field(default_factory=dict)
 
 
-def tune_and_compare(problem: Any, budget: int, tuners: Sequence[str] | dict[str, Any] = ("gradient", "pso", "random"),
-                     *, reference: str | float | None = None, progress: Callable[..., Any] | None = None,
-                     loss_label: str = "loss", table: str = "comparison", figure: str = "loss_vs_budget",
-                     title: str | None = None, **options: Any) -> ComparisonStage:
+def tune_and_compare(
+    problem: Any,
+    budget: int,
+    tuners: Sequence[str] | dict[str, Any] = ("gradient", "pso", "random"),
+    *,
+    reference: str | float | None = None,
+    progress: Callable[..., Any] | None = None,
+    loss_label: str = "loss",
+    table: str = "comparison",
+    figure: str = "loss_vs_budget",
+    title: str | None = None,
+    **options: Any,
+) -> ComparisonStage:
     """Every tuner on ``problem`` with ``budget`` simulations (:func:`optim.compare.compare`).
 
     ``tuners``: standard names (``gradient``, ``pso``, ``random``, ``grid``) or a dict name → ``None``
@@ -72,8 +81,7 @@ def tune_and_compare(problem: Any, budget: int, tuners: Sequence[str] | dict[str
     """
     spec = dict(tuners) if isinstance(tuners, dict) else dict.fromkeys(tuners)
     bar = progress(total=len(spec), desc=f"{problem.name}: tuners", unit="tuner") if progress else None
-    comp = compare(problem, tuners=spec, budget=budget, on_done=(lambda _: bar.update(1)) if bar else None,
-                   **options)
+    comp = compare(problem, tuners=spec, budget=budget, on_done=(lambda _: bar.update(1)) if bar else None, **options)
     if bar is not None:
         bar.close()
     metrics = comparison_metrics(comp)
@@ -99,18 +107,38 @@ def tune_and_compare(problem: Any, budget: int, tuners: Sequence[str] | dict[str
             metrics[f"gap_to_{ref_name}_{name}"] = float(comp.results[name].loss - ref_loss)
         rows.append(row)
     fig = figures.best_so_far(
-        comp, reference=ref_loss, loss_label=loss_label,
-        title=title or f"{problem.name}: tuners on equal budgets ({budget} simulations each)")
+        comp,
+        reference=ref_loss,
+        loss_label=loss_label,
+        title=title or f"{problem.name}: tuners on equal budgets ({budget} simulations each)",
+    )
     designs = {name: res.params for name, res in comp.results.items()}
-    return ComparisonStage(metrics=metrics, tables={table: rows}, figures={figure: fig},
-                           notes=[f"budget {budget} simulations per tuner ({problem.sims_per_eval} per loss "
-                                  "evaluation); wall times exclude compilation (compile_s in the table)"],
-                           data=comp, comparison=comp, designs=designs)
+    return ComparisonStage(
+        metrics=metrics,
+        tables={table: rows},
+        figures={figure: fig},
+        notes=[
+            f"budget {budget} simulations per tuner ({problem.sims_per_eval} per loss "
+            "evaluation); wall times exclude compilation (compile_s in the table)"
+        ],
+        data=comp,
+        comparison=comp,
+        designs=designs,
+    )
 
 
-def responses(problem: Any, designs: dict[str, Any], *, channel: int = 0, y_final: float | None = None,
-              y_label: str = "y", losses: dict[str, float] | None = None, table: str = "step_response",
-              figure: str = "step_responses", title: str | None = None) -> Stage:
+def responses(
+    problem: Any,
+    designs: dict[str, Any],
+    *,
+    channel: int = 0,
+    y_final: float | None = None,
+    y_label: str = "y",
+    losses: dict[str, float] | None = None,
+    table: str = "step_response",
+    figure: str = "step_responses",
+    title: str | None = None,
+) -> Stage:
     """Step-response metrics of output ``channel`` for each design (overshoot %, settling and rise time
     in s; ``y_final`` default: the reference's last value) and the response figure."""
     rows = []
@@ -119,16 +147,34 @@ def responses(problem: Any, designs: dict[str, Any], *, channel: int = 0, y_fina
         yf = float(tr.r[-1, min(channel, tr.r.shape[1] - 1)]) if y_final is None else y_final
         info = step_info(tr.t, tr.y[:, channel], y_final=yf)
         flat = problem.space.flat(params) if isinstance(params, dict) else {}
-        rows.append({"design": name, **flat, "overshoot_percent": float(info.overshoot),
-                     "settling_time_s": float(info.settling_time), "rise_time_s": float(info.rise_time)})
+        rows.append(
+            {
+                "design": name,
+                **flat,
+                "overshoot_percent": float(info.overshoot),
+                "settling_time_s": float(info.settling_time),
+                "rise_time_s": float(info.rise_time),
+            }
+        )
     fig = figures.responses(problem, designs, channel=channel, y_label=y_label, title=title, losses=losses)
     return Stage(tables={table: rows}, figures={figure: fig})
 
 
-def robustness(problem: Any, designs: dict[str, Any], n: int, key: Any, *, band_runs: int = 64,
-               channel: int = 0, y_label: str = "y", quantiles: tuple[float, ...] = (0.05, 0.5, 0.95),
-               progress: Callable[..., Any] | None = None, table: str = "robustness",
-               figure: str = "mc_bands", block_size: int = 1000) -> Stage:
+def robustness(
+    problem: Any,
+    designs: dict[str, Any],
+    n: int,
+    key: Any,
+    *,
+    band_runs: int = 64,
+    channel: int = 0,
+    y_label: str = "y",
+    quantiles: tuple[float, ...] = (0.05, 0.5, 0.95),
+    progress: Callable[..., Any] | None = None,
+    table: str = "robustness",
+    figure: str = "mc_bands",
+    block_size: int = 1000,
+) -> Stage:
     """Monte Carlo of every design over ``problem.uncertainty`` (``n`` runs, fresh noise each; the
     same ``key`` for every design: common random numbers) and the percentile bands of output
     ``channel`` over ``band_runs`` draws."""
@@ -144,19 +190,34 @@ def robustness(problem: Any, designs: dict[str, Any], n: int, key: Any, *, band_
             for q in quantiles:
                 metrics[f"{term}_p{round(100 * q):02d}_{name}"] = float(stats.quantile(q))
     draws = problem.sample(key, band_runs)
-    bands = {name: figures.trajectory_bands(problem, params, draws, channel=channel,
-                                            quantiles=(quantiles[0], 0.5, quantiles[-1]))
-             for name, params in designs.items()}
+    bands = {
+        name: figures.trajectory_bands(
+            problem, params, draws, channel=channel, quantiles=(quantiles[0], 0.5, quantiles[-1])
+        )
+        for name, params in designs.items()
+    }
     unc = ", ".join(problem.uncertainty)
-    fig = figures.mc_bands(bands, y_label=y_label, quantiles=(quantiles[0], 0.5, quantiles[-1]),
-                           title=f"{problem.name}: {band_runs} draws of {unc}")
-    return Stage(metrics=metrics, tables={table: rows}, figures={figure: fig},
-                 notes=[f"Monte Carlo: {n} runs per design over {unc}, common random numbers across designs; "
-                        "quantiles from the streaming sketch (relative error ≤ 1e-3)"], data=results)
+    fig = figures.mc_bands(
+        bands,
+        y_label=y_label,
+        quantiles=(quantiles[0], 0.5, quantiles[-1]),
+        title=f"{problem.name}: {band_runs} draws of {unc}",
+    )
+    return Stage(
+        metrics=metrics,
+        tables={table: rows},
+        figures={figure: fig},
+        notes=[
+            f"Monte Carlo: {n} runs per design over {unc}, common random numbers across designs; "
+            "quantiles from the streaming sketch (relative error ≤ 1e-3)"
+        ],
+        data=results,
+    )
 
 
-def pyswarms_search(problem: Any, n_particles: int, n_iters: int, *, seed: int, inertia: float = 0.7,
-                    c1: float = 1.5, c2: float = 1.5) -> TuneResult:
+def pyswarms_search(
+    problem: Any, n_particles: int, n_iters: int, *, seed: int, inertia: float = 0.7, c1: float = 1.5, c2: float = 1.5
+) -> TuneResult:
     """pyswarms' ``GlobalBestPSO`` (global best, constant ``inertia``, ``c1``, ``c2``) on the problem's
     box in search coordinates, evaluating the problem's jitted batched :meth:`search_loss` (non-finite
     losses count as ``+inf``); ``n_particles·n_iters`` simulations per scenario; ``params`` of the
@@ -169,8 +230,9 @@ def pyswarms_search(problem: Any, n_particles: int, n_iters: int, *, seed: int, 
         import pyswarms as ps
 
         logging.getLogger("pyswarms").setLevel(logging.WARNING)
-        opt = ps.single.GlobalBestPSO(n_particles=n_particles, dimensions=lo.size,
-                                      options={"c1": c1, "c2": c2, "w": inertia}, bounds=(lo, hi))
+        opt = ps.single.GlobalBestPSO(
+            n_particles=n_particles, dimensions=lo.size, options={"c1": c1, "c2": c2, "w": inertia}, bounds=(lo, hi)
+        )
     stamps = []
 
     def objective(x):
@@ -185,8 +247,16 @@ def pyswarms_search(problem: Any, n_particles: int, n_iters: int, *, seed: int, 
     hist = np.minimum.accumulate(np.asarray(opt.cost_history, float))
     sims = n_particles * problem.sims_per_eval * np.arange(1, hist.size + 1)
     history = History(hist, sims, np.asarray(stamps[: hist.size]) - start)
-    return TuneResult(problem.space.from_search(jnp.asarray(pos)), float(best), history, int(sims[-1]), wall,
-                      message="pyswarms GlobalBestPSO")
+    return TuneResult(
+        problem.space.from_search(jnp.asarray(pos)),
+        float(best),
+        history,
+        int(sims[-1]),
+        wall,
+        message="pyswarms GlobalBestPSO",
+    )
+
+
 @dataclass
 class TuningStage(Stage):
     """:func:`gradient_tuning`'s stage; ``result``: the :class:`optim.results.TuneResult`."""
@@ -194,9 +264,18 @@ class TuningStage(Stage):
     result: Any = None
 
 
-def gradient_tuning(problem: Any, *, steps: int, optimizer: Any, progress: Callable[..., Any] | None = None,
-                    loss_label: str = "loss", title: str | None = None, table: str = "tuning_history",
-                    figure: str = "tuning", **options: Any) -> TuningStage:
+def gradient_tuning(
+    problem: Any,
+    *,
+    steps: int,
+    optimizer: Any,
+    progress: Callable[..., Any] | None = None,
+    loss_label: str = "loss",
+    title: str | None = None,
+    table: str = "tuning_history",
+    figure: str = "tuning",
+    **options: Any,
+) -> TuningStage:
     """:func:`optim.tune` of ``problem`` for ``steps`` steps of ``optimizer`` (``options`` go to
     ``tune``: ``mode``, ``n_starts``, ...).  Table rows: ``step``, ``loss`` (the loss evaluated at
     that step, of the start with the lowest one), ``best_loss`` and the evaluated parameters by
@@ -209,15 +288,27 @@ def gradient_tuning(problem: Any, *, steps: int, optimizer: Any, progress: Calla
     res = tune(problem, optimizer=optimizer, steps=steps, callback=record, progress=progress or False, **options)
     for row, best in zip(rows, res.history.best_loss):
         row["best_loss"] = float(best)
-    fig = figures.tuning_curve(res.history, loss_label=loss_label,
-                               title=title or f"{problem.name}: gradient tuning ({res.n_steps} steps)")
-    return TuningStage(tables={table: rows}, figures={figure: fig}, data=res, result=res,
-                       notes=[f"tuning {problem.name}: {res.message}; {res.n_sims} simulations in "
-                              f"{res.wall_s:.1f} s (+{res.compile_s:.1f} s compile)"])
+    fig = figures.tuning_curve(
+        res.history, loss_label=loss_label, title=title or f"{problem.name}: gradient tuning ({res.n_steps} steps)"
+    )
+    return TuningStage(
+        tables={table: rows},
+        figures={figure: fig},
+        data=res,
+        result=res,
+        notes=[
+            f"tuning {problem.name}: {res.message}; {res.n_sims} simulations in "
+            f"{res.wall_s:.1f} s (+{res.compile_s:.1f} s compile)"
+        ],
+    )
 
 
-def merge(*stages: Stage, metrics: dict[str, float] | None = None, notes: Sequence[str] = (),
-          assumptions: dict[str, Any] | None = None) -> StudyResult:
+def merge(
+    *stages: Stage,
+    metrics: dict[str, float] | None = None,
+    notes: Sequence[str] = (),
+    assumptions: dict[str, Any] | None = None,
+) -> StudyResult:
     """One :class:`StudyResult` from the stages (later stages win on a name clash) plus extras."""
     out = StudyResult(assumptions=dict(assumptions or {}))
     for st in stages:

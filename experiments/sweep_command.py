@@ -35,11 +35,18 @@ _DEVICE_FLAG = "--xla_force_host_platform_device_count"
 
 
 def add_parser(sub: Any) -> None:
-    sw = sub.add_parser("sweep", help="Monte Carlo / parameter sweep of a study's per-run metric "
-                        "(resumable, sharded over devices and hosts)")
+    sw = sub.add_parser(
+        "sweep",
+        help="Monte Carlo / parameter sweep of a study's per-run metric (resumable, sharded over devices and hosts)",
+    )
     sw.add_argument("name", metavar="NAME", help="study name (one that exposes a per-run metric)")
-    sw.add_argument("--param", action="append", default=[], metavar="KEY=LO:HI[:N]",
-                    help="swept parameter (repeatable); N points per axis for --design grid")
+    sw.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="KEY=LO:HI[:N]",
+        help="swept parameter (repeatable); N points per axis for --design grid",
+    )
     sw.add_argument("--runs", type=int, required=True, help="Monte-Carlo runs per point")
     sw.add_argument("--design", choices=("grid", "lhs", "sobol"), default="grid")
     sw.add_argument("--points", type=int, default=None, help="number of points for lhs/sobol")
@@ -81,8 +88,9 @@ def _design(args: argparse.Namespace, nominal: dict[str, float]):
     names = [p[0] for p in parsed]
     for name in names:
         if name not in nominal:
-            raise ValueError(f"--param {name}: unknown parameter; this study's parameters: "
-                             f"{', '.join(sorted(nominal))}")
+            raise ValueError(
+                f"--param {name}: unknown parameter; this study's parameters: {', '.join(sorted(nominal))}"
+            )
     if len(set(names)) != len(names):
         raise ValueError(f"--param: a parameter is given twice ({', '.join(names)})")
     if not parsed:
@@ -115,22 +123,25 @@ def run_sweep_command(args: argparse.Namespace) -> int:
 
     import jaxsim.montecarlo as mc
     from experiments.cli import preset_of
+    from experiments.output_folder import check_output_folder, write_marker
     from experiments.progress import bar
     from experiments.registry import all_studies, get_study
-    from experiments.runner import as_study
-    from experiments.output_folder import check_output_folder, write_marker
     from experiments.report import report_file_names, write_report
+    from experiments.runner import as_study
     from experiments.study import StudyResult
     from jaxsim.montecarlo.plots import plot_distribution, plot_sweep
 
     if args.devices is not None and len(jax.devices()) < args.devices:
-        raise ValueError(f"--devices: {args.devices} requested but JAX sees {len(jax.devices())} "
-                         "(it was initialised before the flag could take effect)")
+        raise ValueError(
+            f"--devices: {args.devices} requested but JAX sees {len(jax.devices())} "
+            "(it was initialised before the flag could take effect)"
+        )
     study = as_study(get_study(args.name))
     if study.per_run is None:
         able = [n for n, s in all_studies().items() if s.per_run is not None]
-        raise ValueError(f"NAME: study {study.name!r} exposes no per-run metric; studies that do: "
-                         f"{', '.join(able) or 'none'}")
+        raise ValueError(
+            f"NAME: study {study.name!r} exposes no per-run metric; studies that do: {', '.join(able) or 'none'}"
+        )
     preset, config = study.resolve(preset_of(args), args.overrides)
     spec = study.per_run(config)
     design = _design(args, spec.nominal)
@@ -139,24 +150,41 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     main = jax.process_index() == 0
     if main:  # process 0 alone writes --out
         check_output_folder(out, study.name, "sweep")  # foreign or unwritable: refused before computing
-        print(f"[{study.name}] sweep: {len(design)} point(s) × {args.runs} runs on "
-              f"{len(jax.devices()) if args.devices is None else args.devices} device(s), "
-              f"{jax.process_count()} process(es) → {out}", file=sys.stderr)
+        print(
+            f"[{study.name}] sweep: {len(design)} point(s) × {args.runs} runs on "
+            f"{len(jax.devices()) if args.devices is None else args.devices} device(s), "
+            f"{jax.process_count()} process(es) → {out}",
+            file=sys.stderr,
+        )
     result = mc.sweep(
-        spec.metric, space, design, args.runs, args.seed, chunk_size=args.chunk,
-        keep_runs=args.keep_runs, devices=args.devices if jax.process_count() == 1 else None,
-        out=out, resume=args.resume, name=f"study:{study.name}",
-        extra={"config": dataclasses.asdict(config)}, progress=bar,
+        spec.metric,
+        space,
+        design,
+        args.runs,
+        args.seed,
+        chunk_size=args.chunk,
+        keep_runs=args.keep_runs,
+        devices=args.devices if jax.process_count() == 1 else None,
+        out=out,
+        resume=args.resume,
+        name=f"study:{study.name}",
+        extra={"config": dataclasses.asdict(config)},
+        progress=bar,
     )
     if not main:
         return 0
     wall = sum(r.wall_s for r in result.points)
     computed_runs = sum(r.runs_computed for r in result.points)
     metrics = {
-        "n_points": len(design), "runs_per_point": args.runs, "runs_total": len(design) * args.runs,
-        "devices": result.points[0].devices, "processes": result.points[0].processes,
-        "chunks_computed": result.chunks_computed, "chunks_loaded": result.chunks_loaded,
-        "chunks_rejected": len(result.rejected_chunks), "wall_s": wall,
+        "n_points": len(design),
+        "runs_per_point": args.runs,
+        "runs_total": len(design) * args.runs,
+        "devices": result.points[0].devices,
+        "processes": result.points[0].processes,
+        "chunks_computed": result.chunks_computed,
+        "chunks_loaded": result.chunks_loaded,
+        "chunks_rejected": len(result.rejected_chunks),
+        "wall_s": wall,
     }
     if computed_runs:
         metrics["runs_per_s"] = computed_runs / max(wall, 1e-9)
@@ -169,18 +197,23 @@ def run_sweep_command(args: argparse.Namespace) -> int:
     raws = [r.raw for r in result.points if r.raw is not None]
     if raws:
         tables["raw_runs"] = _raw_rows(result)
-    notes = [f"design {design.kind} over {', '.join(design.names) or '(no parameter)'}; "
-             f"uncertain: {', '.join(spec.uncertain) or 'none'}; seed {args.seed}; "
-             f"same key at every point (common random numbers)",
-             f"fingerprint {result.fingerprint}"]
+    notes = [
+        f"design {design.kind} over {', '.join(design.names) or '(no parameter)'}; "
+        f"uncertain: {', '.join(spec.uncertain) or 'none'}; seed {args.seed}; "
+        f"same key at every point (common random numbers)",
+        f"fingerprint {result.fingerprint}",
+    ]
     notes += [f"damaged chunk recomputed: {f} ({why})" for f, why in result.rejected_chunks]
     study_result = StudyResult(metrics=metrics, tables=tables, figures=figures, notes=notes)
     files = report_file_names(study_result)
     write_marker(out, study.name, "sweep", files, final=False)  # listed before they exist: crash-safe
     path = write_report(f"{study.name} (sweep)", config, study_result, out, {"preset": preset})
     write_marker(out, study.name, "sweep", files)  # stale files of an earlier report removed
-    print(f"[{study.name}] sweep done in {wall:.1f} s ({result.chunks_computed} chunk(s) computed, "
-          f"{result.chunks_loaded} loaded); wrote {path}", file=sys.stderr)
+    print(
+        f"[{study.name}] sweep done in {wall:.1f} s ({result.chunks_computed} chunk(s) computed, "
+        f"{result.chunks_loaded} loaded); wrote {path}",
+        file=sys.stderr,
+    )
     return 0
 
 

@@ -92,59 +92,87 @@ ASSUMPTIONS = {
         "the paper gives no model numbers; TRMS table 'from the Feedback manufacturer', JAMRIS 2025, "
         "doi:10.14313/jamris-2025-026 (b2 = 0.09, Kgy = 0.5, kc = −0.2, Tp = 2, T0 = 3.5); the Sci. Rep. "
         "2022 set (doi:10.1038/s41598-022-21357-3: b2 = 0.9, Kgy = 0.05, kc = 2) is the named variant "
-        "'scirep_2022'"),
-    "u_max": assumption(2.5, "±2.5 V input saturation as recalled from the Feedback manual (spec §B1.4); "
-                             "not verified against an accessible primary source"),
+        "'scirep_2022'",
+    ),
+    "u_max": assumption(
+        2.5,
+        "±2.5 V input saturation as recalled from the Feedback manual (spec §B1.4); "
+        "not verified against an accessible primary source",
+    ),
     "operating_point": assumption(
         "pitch −0.05 rad, yaw 0, computed by find_equilibrium",
         "centre of the pitch wave; with kc = −0.2 the tail rotor can only balance the reaction torque "
-        "for pitch ≲ 0.15 rad, so the references stay inside that trim envelope"),
+        "for pitch ≲ 0.15 rad, so the references stay inside that trim envelope",
+    ),
     "references": assumption(
         "pitch square wave −0.2 ↔ +0.1 rad, period 20 s; yaw ±0.2 rad, period 30 s, phase-shifted 5 s "
         "(yaw is −0.2 from t = 0 and switches at 5, 20, 35, 50 s; pitch switches every 10 s)",
         "the paper gives none; spec §B1.4 suggests ±0.2 rad square waves, the pitch wave is shifted "
         "into the trim envelope and the yaw wave phase-shifted so most steps do not coincide "
         "(they do at 20 and 50 s); the ITAE clock of each axis is the time since its wave's last "
-        "switch, which for yaw before 5 s is the periodic wave's switch at −10 s"),
+        "switch, which for yaw before 5 s is the periodic wave's switch at −10 s",
+    ),
     "sample_time": assumption(0.01, "s, controller period and RK4 plant step (spec §B1.4 suggests 0.01 s)"),
     "sensor_noise": assumption(
-        2e-3, "rad, white noise on both angles (encoder-class resolution); Kalman–Bucy V = σ²·Ts"),
+        2e-3, "rad, white noise on both angles (encoder-class resolution); Kalman–Bucy V = σ²·Ts"
+    ),
     "observer": assumption(
         "continuous Kalman–Bucy gain, observer ODE integrated exactly (ZOH of u and y) every period",
-        "the paper names a Kalman–Bucy filter for the continuous design"),
+        "the paper names a Kalman–Bucy filter for the continuous design",
+    ),
     "friction_surrogate": assumption(
-        0.05, "rad/s: sgn(v) → tanh(v/ε) on the tuning path; designs are re-evaluated and Monte-Carlo "
-              "tested with the exact sgn"),
+        0.05,
+        "rad/s: sgn(v) → tanh(v/ε) on the tuning path; designs are re-evaluated and Monte-Carlo "
+        "tested with the exact sgn",
+    ),
     "loss": assumption(
         "Σ per-step ITAE + 0.01·∫‖u−u_eq‖² + 10·∫ max(0,|u|−u_max)² + 1e4·max(0, ρ(Φ_cl) − 0.999)²",
         "the paper trades 'speed of response and energy efficiency' without a formula; ITAE is taken "
-        "per reference step (time since the channel's last switch)"),
+        "per reference step (time since the channel's last switch)",
+    ),
     "start_point": assumption(
         "Bryson's rule: Q = diag(1/0.15², 1/0.2², 1, 1, 1, 1, 1), R = I/2.5², W = 1e-4·I",
-        "a standard engineer's first guess; the gradient tuner starts there"),
-    "search_box": assumption("log10 Q ∈ [−2, 4], log10 R ∈ [−3, 2], log10 W ∈ [−8, 0]",
-                             "box for PSO, pyswarms and random search (and the gradient's reparametrisation)"),
-    "pso": assumption("30 particles × 50 iterations, w = 0.7, c1 = c2 = 1.5, global best",
-                      "spec §B1.2 suggests 30 particles × 50–100 iterations, w = 0.7, c1 = c2 = 1.5"),
-    "gradient": assumption("Adam, learning rate 0.1, 150 steps, from the Bryson point",
-                           "one loss + forward-mode gradient per step; counted as one simulation"),
+        "a standard engineer's first guess; the gradient tuner starts there",
+    ),
+    "search_box": assumption(
+        "log10 Q ∈ [−2, 4], log10 R ∈ [−3, 2], log10 W ∈ [−8, 0]",
+        "box for PSO, pyswarms and random search (and the gradient's reparametrisation)",
+    ),
+    "pso": assumption(
+        "30 particles × 50 iterations, w = 0.7, c1 = c2 = 1.5, global best",
+        "spec §B1.2 suggests 30 particles × 50–100 iterations, w = 0.7, c1 = c2 = 1.5",
+    ),
+    "gradient": assumption(
+        "Adam, learning rate 0.1, 150 steps, from the Bryson point",
+        "one loss + forward-mode gradient per step; counted as one simulation",
+    ),
     "ppo": assumption(
         "brax PPO, 2e6 ticks (quick 2e5), 64 envs, unroll 20, batch 64 × 8 minibatches, 4 updates, lr 1e-3, "
         "γ = 0.98, action repeat 5, initial angles ± 0.05 rad, observation = state − trim and r − y",
         "an untuned reinforcement-learning baseline on the same task and per-step loss (reward = −loss); "
-        "the policy sees the true state (no noise, no observer) and has no stability constraint"),
+        "the policy sees the true state (no noise, no observer) and has no stability constraint",
+    ),
     "monte_carlo": assumption(
         "256 samples, uniform ±20 % on I1, I2, kc, a1, a2 and the noise std, fresh noise keys, exact sgn",
-        "the issue's ±20 % on I1, I2, kc, a1, a2 and sensor noise"),
+        "the issue's ±20 % on I1, I2, kc, a1, a2 and sensor noise",
+    ),
 }
 
 
 CLAIMS = [  # the paper gives no numbers (spec §B1): the claims are its qualitative ones and invariants
-    Claim("gradient_vs_start_loss_ratio", paper=1.0, band=(0.0, 1.0),
-          source="seed004 lines 3302–3443: tuned Q/R improve on a first guess (here Bryson's rule)"),
-    Claim("gradient_vs_pso_loss_ratio", paper=1.0, band=(0.0, 1.05),
-          source="the study's hypothesis: gradient through Riccati + rollout matches the paper's PSO on equal "
-                 "budgets", note="a full-preset claim: the quick budgets are too small to decide it"),
+    Claim(
+        "gradient_vs_start_loss_ratio",
+        paper=1.0,
+        band=(0.0, 1.0),
+        source="seed004 lines 3302–3443: tuned Q/R improve on a first guess (here Bryson's rule)",
+    ),
+    Claim(
+        "gradient_vs_pso_loss_ratio",
+        paper=1.0,
+        band=(0.0, 1.05),
+        source="the study's hypothesis: gradient through Riccati + rollout matches the paper's PSO on equal budgets",
+        note="a full-preset claim: the quick budgets are too small to decide it",
+    ),
 ]
 
 
@@ -157,12 +185,16 @@ def problems_of(cfg: Config, tr: TRMSTuning) -> tuple[Problem, Problem]:
     """The tuning problem (nominal plant, friction surrogate, fixed noise key) and the robustness
     problem (exact friction; factors on ``PERTURBED`` and the noise level drawn ±``mc_spread``)."""
     lo, hi = tr.bounds()
-    space = ParamSpace(theta=Param(lo=lo, hi=hi, init=tr.bryson_theta(),
-                                   labels=tuple(f"log_{n}" for n in THETA_LABELS), reparam=Identity()))
+    space = ParamSpace(
+        theta=Param(
+            lo=lo, hi=hi, init=tr.bryson_theta(), labels=tuple(f"log_{n}" for n in THETA_LABELS), reparam=Identity()
+        )
+    )
 
     def terms(b: Any) -> Breakdown:
-        return Breakdown({"itae": b.itae, "energy": b.energy, "saturation": b.saturation,
-                          "stability": b.stability}, b.total)
+        return Breakdown(
+            {"itae": b.itae, "energy": b.energy, "saturation": b.saturation, "stability": b.stability}, b.total
+        )
 
     def exact_plant(d: dict[str, Any]) -> Any:
         return tr.plant_params(True, jnp.stack([d[n] for n in PERTURBED]))
@@ -174,9 +206,13 @@ def problems_of(cfg: Config, tr: TRMSTuning) -> tuple[Problem, Problem]:
     tuning = Problem.from_loss("trms_lqg", space, lambda p, d, k: terms(tr.breakdown(p["theta"], key=k)))
     names = (*PERTURBED, "noise")
     robust = Problem.from_loss(
-        "trms_lqg_exact_friction", space, build=build, nominal=dict.fromkeys(names, 1.0),
+        "trms_lqg_exact_friction",
+        space,
+        build=build,
+        nominal=dict.fromkeys(names, 1.0),
         uncertainty={n: mc.deviation(1.0, cfg.mc_spread, relative=True) for n in names},
-        loss_fn=lambda p, d, k: terms(tr.breakdown(p["theta"], exact_plant(d), k, cfg.noise_std * d["noise"])))
+        loss_fn=lambda p, d, k: terms(tr.breakdown(p["theta"], exact_plant(d), k, cfg.noise_std * d["noise"])),
+    )
     return tuning, robust
 
 
@@ -184,12 +220,21 @@ def searches(cfg: Config, problem: Problem, seed: int) -> dict[str, Callable[[],
     """JAX PSO, pyswarms and random search, each given ``particles × iters`` simulations."""
     key = jax.random.PRNGKey(seed)
     return {
-        "pso": lambda: pso(problem, n_particles=cfg.pso_particles, n_iters=cfg.pso_iters, key=key,
-                           inertia=(cfg.pso_inertia, cfg.pso_inertia), c1=1.5, c2=1.5),
-        "pyswarms": lambda: stages.pyswarms_search(problem, cfg.pso_particles, cfg.pso_iters, seed=seed,
-                                                   inertia=cfg.pso_inertia),
-        "random": lambda: random_search(problem, n=cfg.pso_particles * cfg.pso_iters,
-                                        key=jax.random.fold_in(key, 1), batch_size=cfg.pso_particles),
+        "pso": lambda: pso(
+            problem,
+            n_particles=cfg.pso_particles,
+            n_iters=cfg.pso_iters,
+            key=key,
+            inertia=(cfg.pso_inertia, cfg.pso_inertia),
+            c1=1.5,
+            c2=1.5,
+        ),
+        "pyswarms": lambda: stages.pyswarms_search(
+            problem, cfg.pso_particles, cfg.pso_iters, seed=seed, inertia=cfg.pso_inertia
+        ),
+        "random": lambda: random_search(
+            problem, n=cfg.pso_particles * cfg.pso_iters, key=jax.random.fold_in(key, 1), batch_size=cfg.pso_particles
+        ),
     }
 
 
@@ -199,22 +244,31 @@ def tuners(cfg: Config, problem: Problem, runs_by_seed: dict[str, list]) -> dict
 
     def median_of(name: str) -> Callable[..., Any]:
         def run(*_):
-            runs_by_seed[name] = [(s, searches(cfg, problem, s)[name]()) for s in
-                                  range(cfg.seed, cfg.seed + cfg.search_seeds)]
+            runs_by_seed[name] = [
+                (s, searches(cfg, problem, s)[name]()) for s in range(cfg.seed, cfg.seed + cfg.search_seeds)
+            ]
             ordered = sorted(runs_by_seed[name], key=lambda sr: sr[1].loss)
             return ordered[(len(ordered) - 1) // 2][1]  # the lower median for an even count
+
         return run
 
-    grad = lambda *_: tune(problem, optimizer=optax.adam(cfg.learning_rate), steps=cfg.gradient_steps)
+    grad = lambda *_: tune(problem, optimizer=optax.adam(cfg.learning_rate), steps=cfg.gradient_steps)  # noqa: E731
     return {"gradient": grad, **{name: median_of(name) for name in SEARCHES}}
 
 
 def design_row(tr: TRMSTuning, evaluate: Callable, name: str, theta: Any) -> dict[str, Any]:
     """Loss terms of one design (friction surrogate), its loss with exact friction and its weights."""
     b, be = evaluate(jnp.asarray(theta), tr.plant_params()), evaluate(jnp.asarray(theta), tr.plant_params(True))
-    return {"design": name, "loss": float(b.total), "itae": float(b.itae), "energy": float(b.energy),
-            "saturation": float(b.saturation), "stability_penalty": float(b.stability),
-            "loss_exact_friction": float(be.total), **dict(zip(THETA_LABELS, np.exp(np.asarray(theta)).tolist()))}
+    return {
+        "design": name,
+        "loss": float(b.total),
+        "itae": float(b.itae),
+        "energy": float(b.energy),
+        "saturation": float(b.saturation),
+        "stability_penalty": float(b.stability),
+        "loss_exact_friction": float(be.total),
+        **dict(zip(THETA_LABELS, np.exp(np.asarray(theta)).tolist())),
+    }
 
 
 def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
@@ -222,73 +276,152 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     problem, robust = problems_of(cfg, tr)
     runs_by_seed: dict[str, list] = {}
     cmp = stages.tune_and_compare(
-        problem, cfg.pso_particles * cfg.pso_iters, tuners(cfg, problem, runs_by_seed), progress=progress,
-        table="tuners", figure="convergence", title=f"TRMS LQG tracker: best loss vs simulations / seconds "
-                                                      f"(searches: median of {cfg.search_seeds} seeds)")
+        problem,
+        cfg.pso_particles * cfg.pso_iters,
+        tuners(cfg, problem, runs_by_seed),
+        progress=progress,
+        table="tuners",
+        figure="convergence",
+        title=f"TRMS LQG tracker: best loss vs simulations / seconds (searches: median of {cfg.search_seeds} seeds)",
+    )
     res, thetas = cmp.comparison.results, {n: np.asarray(p["theta"]) for n, p in cmp.designs.items()}
     polish = None  # not part of the equal-budget race: what a few gradient steps add to the swarm's answer
     if cfg.polish_steps > 0:
-        polish = tune(problem, {"theta": jnp.asarray(thetas["pso"])}, optimizer=optax.adam(cfg.learning_rate),
-                      steps=cfg.polish_steps)
+        polish = tune(
+            problem,
+            {"theta": jnp.asarray(thetas["pso"])},
+            optimizer=optax.adam(cfg.learning_rate),
+            steps=cfg.polish_steps,
+        )
         thetas["pso_then_gradient"] = np.asarray(polish.params["theta"])
     evaluate = jax.jit(tr.breakdown)  # one compilation: both plants have the same structure
     designs = [design_row(tr, evaluate, n, th) for n, th in {"bryson_start": tr.bryson_theta(), **thetas}.items()]
     by = {d["design"]: d for d in designs}
-    rl = ppo_baseline(tr, PPOSettings(num_timesteps=cfg.ppo_timesteps, action_repeat=cfg.ppo_action_repeat,
-                                      num_envs=cfg.ppo_num_envs, learning_rate=cfg.ppo_learning_rate, seed=cfg.seed))
+    rl = ppo_baseline(
+        tr,
+        PPOSettings(
+            num_timesteps=cfg.ppo_timesteps,
+            action_repeat=cfg.ppo_action_repeat,
+            num_envs=cfg.ppo_num_envs,
+            learning_rate=cfg.ppo_learning_rate,
+            seed=cfg.seed,
+        ),
+    )
     if rl is not None:
-        by["brax_ppo"] = {"design": "brax_ppo", "loss": rl.loss.total, "itae": rl.loss.itae, "energy": rl.loss.energy,
-                          "saturation": rl.loss.saturation, "stability_penalty": 0.0,
-                          "loss_exact_friction": rl.loss_exact_friction}
+        by["brax_ppo"] = {
+            "design": "brax_ppo",
+            "loss": rl.loss.total,
+            "itae": rl.loss.itae,
+            "energy": rl.loss.energy,
+            "saturation": rl.loss.saturation,
+            "stability_penalty": 0.0,
+            "loss_exact_friction": rl.loss_exact_friction,
+        }
         designs.append(by["brax_ppo"])
     mc_designs = {n: {"theta": jnp.asarray(thetas[n])} for n in ("gradient", "pso")}
-    robustness = stages.robustness(robust, mc_designs, cfg.mc_samples, cfg.seed + 1, band_runs=cfg.mc_samples,
-                                   y_label="pitch ψ, rad", progress=progress, table="monte_carlo")
+    robustness = stages.robustness(
+        robust,
+        mc_designs,
+        cfg.mc_samples,
+        cfg.seed + 1,
+        band_runs=cfg.mc_samples,
+        y_label="pitch ψ, rad",
+        progress=progress,
+        table="monte_carlo",
+    )
 
     n_sims_grad = int(res["gradient"].n_sims)
-    seed_rows = [{"tuner": name, "seed": seed, "best_loss": float(r.loss), "sims": int(r.n_sims), "wall_s": float(r.wall_s),
-                  "best_loss_within_gradient_sims": best_within(Curve(np.asarray(r.history.sims, float), np.asarray(
-                      r.history.wall_s, float), np.asarray(r.history.best_loss, float)), sims=n_sims_grad)}
-                 for name, runs in runs_by_seed.items() for seed, r in runs]
+    seed_rows = [
+        {
+            "tuner": name,
+            "seed": seed,
+            "best_loss": float(r.loss),
+            "sims": int(r.n_sims),
+            "wall_s": float(r.wall_s),
+            "best_loss_within_gradient_sims": best_within(
+                Curve(
+                    np.asarray(r.history.sims, float),
+                    np.asarray(r.history.wall_s, float),
+                    np.asarray(r.history.best_loss, float),
+                ),
+                sims=n_sims_grad,
+            ),
+        }
+        for name, runs in runs_by_seed.items()
+        for seed, r in runs
+    ]
     curve, pso_best = cmp.comparison.curves["gradient"], float(res["pso"].loss)
     reached = np.nonzero(curve.best_loss <= pso_best)[0]
     ratio = _gradient_cost_ratio(tr) if cfg.measure_gradient_cost else float("nan")
     metrics = {
-        "loss_start": by["bryson_start"]["loss"], "search_seeds": cfg.search_seeds,
-        **{f"loss_{n}_seeds_{f.__name__}": f(float(r.loss) for _, r in runs) for n, runs in runs_by_seed.items()
-           for f in (min, max)},
+        "loss_start": by["bryson_start"]["loss"],
+        "search_seeds": cfg.search_seeds,
+        **{
+            f"loss_{n}_seeds_{f.__name__}": f(float(r.loss) for _, r in runs)
+            for n, runs in runs_by_seed.items()
+            for f in (min, max)
+        },
         "loss_pso_then_gradient": float("nan") if polish is None else float(polish.loss),
         "sims_pso_then_gradient": int(res["pso"].n_sims) + (0 if polish is None else int(polish.n_sims)),
         "gradient_sims_to_reach_pso_loss": float(curve.sims[reached[0]]) if reached.size else float("nan"),
         "gradient_eval_cost_in_loss_evals": ratio,
         "loss_exact_friction_gradient": by["gradient"]["loss_exact_friction"],
         "loss_exact_friction_pso": by["pso"]["loss_exact_friction"],
-        "loss_pso_at_gradient_sims": float(np.median([r["best_loss_within_gradient_sims"] for r in seed_rows
-                                                      if r["tuner"] == "pso"])),
+        "loss_pso_at_gradient_sims": float(
+            np.median([r["best_loss_within_gradient_sims"] for r in seed_rows if r["tuner"] == "pso"])
+        ),
         "gradient_vs_start_loss_ratio": float(res["gradient"].loss) / by["bryson_start"]["loss"],
         "gradient_vs_pso_loss_ratio": float(res["gradient"].loss) / pso_best,
     }
     for n in ("gradient", "pso"):
         stats = robustness.data[n]["total"]
-        metrics.update({f"mc_loss_p95_{n}": float(stats.quantile(0.95)), f"mc_loss_median_{n}": float(stats.quantile(0.5)),
-                        f"mc_nonfinite_{n}": int(stats.nonfinite)})
+        metrics.update(
+            {
+                f"mc_loss_p95_{n}": float(stats.quantile(0.95)),
+                f"mc_loss_median_{n}": float(stats.quantile(0.5)),
+                f"mc_nonfinite_{n}": int(stats.nonfinite),
+            }
+        )
     rows = cmp.tables["tuners"]
     if rl is not None:
         n_ticks = int(round(cfg.t_final / cfg.ts))
-        metrics.update({"loss_rl_ppo": rl.loss.total, "loss_exact_friction_rl_ppo": rl.loss_exact_friction,
-                        "return_rl_ppo": -rl.rollout_loss,  # Σ env rewards: must equal −loss_rl_ppo
-                        "env_steps_rl_ppo": rl.env_steps, "sims_rl_ppo": rl.env_steps / n_ticks, "wall_rl_ppo_s": rl.wall_s})
-        rows.append({"tuner": "brax_ppo", "best_loss": rl.loss.total, "sims": rl.env_steps / n_ticks, "wall_s": rl.wall_s,
-                     "message": f"{rl.env_steps} env steps (ticks) = {rl.env_steps / n_ticks:.0f} episodes of the "
-                                "horizon; wall time includes brax's compilation"})
+        metrics.update(
+            {
+                "loss_rl_ppo": rl.loss.total,
+                "loss_exact_friction_rl_ppo": rl.loss_exact_friction,
+                "return_rl_ppo": -rl.rollout_loss,  # Σ env rewards: must equal −loss_rl_ppo
+                "env_steps_rl_ppo": rl.env_steps,
+                "sims_rl_ppo": rl.env_steps / n_ticks,
+                "wall_rl_ppo_s": rl.wall_s,
+            }
+        )
+        rows.append(
+            {
+                "tuner": "brax_ppo",
+                "best_loss": rl.loss.total,
+                "sims": rl.env_steps / n_ticks,
+                "wall_s": rl.wall_s,
+                "message": f"{rl.env_steps} env steps (ticks) = {rl.env_steps / n_ticks:.0f} episodes of the "
+                "horizon; wall time includes brax's compilation",
+            }
+        )
     if polish is not None:
-        rows.append({"tuner": "pso_then_gradient", "best_loss": float(polish.loss),
-                     "sims": metrics["sims_pso_then_gradient"],
-                     "wall_s": float(res["pso"].wall_s) + float(polish.wall_s), "message": polish.message})
+        rows.append(
+            {
+                "tuner": "pso_then_gradient",
+                "best_loss": float(polish.loss),
+                "sims": metrics["sims_pso_then_gradient"],
+                "wall_s": float(res["pso"].wall_s) + float(polish.wall_s),
+                "message": polish.message,
+            }
+        )
     shown = {"bryson start": robust.space.init, "gradient": mc_designs["gradient"], "pso": mc_designs["pso"]}
-    responses = {f"responses_{axis}": figures.responses(
-        robust, shown, channel=k, y_label=f"{axis}, rad", title=f"TRMS, exact friction: {axis} of the LQG designs")
-        for k, axis in enumerate(("pitch", "yaw"))}
+    responses = {
+        f"responses_{axis}": figures.responses(
+            robust, shown, channel=k, y_label=f"{axis}, rad", title=f"TRMS, exact friction: {axis} of the LQG designs"
+        )
+        for k, axis in enumerate(("pitch", "yaw"))
+    }
     winner = "gradient" if float(res["gradient"].loss) <= pso_best else "PSO"
     notes = [
         f"each search: {cfg.pso_particles}×{cfg.pso_iters} simulations; the gradient tuner {n_sims_grad} (one rollout "
@@ -298,15 +431,22 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         "and by friction stay in the ITAE, the tuner trades them against energy",
         f"tuning losses use the friction surrogate (ε = {cfg.sign_smoothing} rad/s), 'loss_exact_friction' sgn; "
         f"RK4 at {cfg.ts} s over {cfg.t_final} s, noise key 0 for every tuner (common random numbers)",
-        "brax PPO baseline skipped (ppo_timesteps = 0 or brax not installed)" if rl is None else
-        f"brax PPO baseline: {rl.env_steps} env steps, {rl.wall_s:.0f} s wall including compilation; the policy "
+        "brax PPO baseline skipped (ppo_timesteps = 0 or brax not installed)"
+        if rl is None
+        else f"brax PPO baseline: {rl.env_steps} env steps, {rl.wall_s:.0f} s wall including compilation; the policy "
         "observes the true state (no sensor noise, no observer)",
     ]
-    return StudyResult(metrics={**cmp.metrics, **robustness.metrics, **metrics},
-                       tables={"tuners": rows, "designs": designs, "monte_carlo": robustness.tables["monte_carlo"],
-                               "search_seeds": seed_rows},
-                       figures={**cmp.figures, **responses, **robustness.figures},
-                       notes=[*cmp.notes, *robustness.notes, *notes])
+    return StudyResult(
+        metrics={**cmp.metrics, **robustness.metrics, **metrics},
+        tables={
+            "tuners": rows,
+            "designs": designs,
+            "monte_carlo": robustness.tables["monte_carlo"],
+            "search_seeds": seed_rows,
+        },
+        figures={**cmp.figures, **responses, **robustness.figures},
+        notes=[*cmp.notes, *robustness.notes, *notes],
+    )
 
 
 def _gradient_cost_ratio(tr: TRMSTuning, repeats: int = 3) -> float:
@@ -330,8 +470,19 @@ STUDY = Study(
     name="trms_lqr_tuning",
     description="TRMS LQG tracker: Q/R/W tuned by gradient through Riccati + rollout vs PSO, pyswarms, random",
     config=Config,
-    presets={"quick": dict(t_final=30.0, gradient_steps=25, polish_steps=0, pso_particles=10, pso_iters=6,
-                           search_seeds=1, mc_samples=16, ppo_timesteps=200_000, measure_gradient_cost=False)},
+    presets={
+        "quick": dict(
+            t_final=30.0,
+            gradient_steps=25,
+            polish_steps=0,
+            pso_particles=10,
+            pso_iters=6,
+            search_seeds=1,
+            mc_samples=16,
+            ppo_timesteps=200_000,
+            measure_gradient_cost=False,
+        )
+    },
     claims=CLAIMS,
     assumptions=ASSUMPTIONS,
     run=run,

@@ -94,16 +94,26 @@ def train_and_evaluate(problem: TRMSTuning, settings: PPOSettings) -> PPOResult:
     env = trms_env(problem, x0_spread=spread)
     start = time.perf_counter()
     make_policy, params, _ = ppo.train(
-        env, num_timesteps=settings.num_timesteps, episode_length=n_ticks,
-        action_repeat=settings.action_repeat, num_envs=settings.num_envs, batch_size=settings.batch_size,
-        num_minibatches=settings.num_minibatches, unroll_length=settings.unroll_length,
-        num_updates_per_batch=settings.num_updates_per_batch, learning_rate=settings.learning_rate,
-        entropy_cost=settings.entropy_cost, discounting=settings.discounting,
-        reward_scaling=settings.reward_scaling, normalize_observations=True, seed=settings.seed,
-        num_evals=0, run_evals=False)
+        env,
+        num_timesteps=settings.num_timesteps,
+        episode_length=n_ticks,
+        action_repeat=settings.action_repeat,
+        num_envs=settings.num_envs,
+        batch_size=settings.batch_size,
+        num_minibatches=settings.num_minibatches,
+        unroll_length=settings.unroll_length,
+        num_updates_per_batch=settings.num_updates_per_batch,
+        learning_rate=settings.learning_rate,
+        entropy_cost=settings.entropy_cost,
+        discounting=settings.discounting,
+        reward_scaling=settings.reward_scaling,
+        normalize_observations=True,
+        seed=settings.seed,
+        num_evals=0,
+        run_evals=False,
+    )
     wall = time.perf_counter() - start
-    per_step = (settings.batch_size * settings.unroll_length * settings.num_minibatches
-                * settings.action_repeat)
+    per_step = settings.batch_size * settings.unroll_length * settings.num_minibatches * settings.action_repeat
     env_steps = int(np.ceil(settings.num_timesteps / per_step)) * per_step  # brax runs whole training steps
     policy = make_policy(params, deterministic=True)
 
@@ -113,9 +123,14 @@ def train_and_evaluate(problem: TRMSTuning, settings: PPOSettings) -> PPOResult:
     loop = ClosedLoop(env.task.plant, open_loop(jnp.asarray(smooth.u)), reference=problem.reference)
     terms = jax.jit(problem.loop_terms)(loop, jax.random.PRNGKey(0))
     loss = problem.combine(terms, jnp.zeros(()))
-    return PPOResult(loss=Breakdown(*(float(v) for v in loss)), loss_exact_friction=-float(np.sum(exact.reward)),
-                     env_steps=env_steps, wall_s=wall, rollout=exact,
-                     rollout_loss=-float(np.sum(smooth.reward)))
+    return PPOResult(
+        loss=Breakdown(*(float(v) for v in loss)),
+        loss_exact_friction=-float(np.sum(exact.reward)),
+        env_steps=env_steps,
+        wall_s=wall,
+        rollout=exact,
+        rollout_loss=-float(np.sum(smooth.reward)),
+    )
 
 
 def ppo_baseline(problem: TRMSTuning, settings: PPOSettings) -> PPOResult | None:

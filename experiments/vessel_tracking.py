@@ -76,8 +76,13 @@ def envelope_name(stem: str, speed: float) -> str:
 
 def _claim(stem: str, speed: float, target: Any) -> Claim:
     lo, hi = (target, target) if np.isscalar(target) else target
-    return Claim(envelope_name(stem, speed), paper=lo, band=(0.7 * lo, 1.3 * hi), source=SOURCE,
-                 note="" if lo == hi else f"paper: {lo:g}–{hi:g}")
+    return Claim(
+        envelope_name(stem, speed),
+        paper=lo,
+        band=(0.7 * lo, 1.3 * hi),
+        source=SOURCE,
+        note="" if lo == hi else f"paper: {lo:g}–{hi:g}",
+    )
 
 
 PAPER = {stem: paper for stem, _, _, paper in ENVELOPE}
@@ -87,67 +92,102 @@ ASSUMPTIONS = {
     "noise": assumption(
         "range σ 7 m, cross-range σ 7 m at 8 km (bearing σ 0.050°), plus the 6 m / 0.03° resolution cells",
         "the paper gives only the resolution and says σ̂ ≈ 10 m 'reflects the RMS coordinate error': a 2-D "
-        "RMS of 10 m is 7.07 m per coordinate; the extended-echo (centroid) error dominates the cells"),
+        "RMS of 10 m is 7.07 m per coordinate; the extended-echo (centroid) error dominates the cells",
+    ),
     "target_range": assumption(8000.0, "a VTS radar's typical range; it sets the bearing error in metres"),
     "turn_angle_deg": assumption(90.0, "not stated; a 300 m arc flown for the paper's 45 s at 10 m/s is 86°"),
     "turn_timing": assumption(
         "turn from t = 45 s at both speeds (ends 92.1 s at 10 m/s, 68.6 s at 20 m/s); run 120 s",
         "the paper gives [45, 90] s at 10 m/s only; at 20 m/s it shows the window recovering on [65, 75] s, "
-        "which fits the same start time"),
+        "which fits the same start time",
+    ),
     "kappa": assumption(
         "√(3π/2) = 2.171",
         "the paper writes σ̂ = mean(Δz⁽²⁾) and says it settles at ≈ 10 m, the RMS plot error; under CV "
         "mean(Δz⁽²⁾) = √(3π/2)·(2-D RMS), so this normaliser makes σ̂ that RMS (κ = 1 gives σ̂ ≈ 22 m; "
-        "table sensitivity)"),
+        "table sensitivity)",
+    ),
     "tnorm": assumption("product", "not stated; min is in table sensitivity"),
     "max_with_previous": assumption(
         "max of the raw Sugeno outputs m_t, m_{t−1}",
-        "with the final previous value the maximum could never fall, contradicting Fig. 5"),
+        "with the final previous value the maximum could never fall, contradicting Fig. 5",
+    ),
     "warm_up": assumption(30.0, "statistics and gate checks start when the 10-plot window is full"),
-    "recovery": assumption(10.0, "the paper says the window changes within 10 s; the turn phase includes "
-                                 "10 s after the turn ends"),
+    "recovery": assumption(
+        10.0, "the paper says the window changes within 10 s; the turn phase includes 10 s after the turn ends"
+    ),
     "track_loss": assumption(
         "first scan ≥ warm_up whose plot is farther than the gate radius from the one-scan prediction",
-        "the paper uses the filtered error ε as a proxy for the gate width; a gate sees the prediction"),
+        "the paper uses the filtered error ε as a proxy for the gate width; a gate sees the prediction",
+    ),
     "loss_population": assumption(
         "speed U(10, 20) m/s, turn start U(45, 48) s, 90° turn, radar noise as above",
-        "the paper's two speeds and everything between; the turn need not start at a scan"),
-    "gate": assumption(50.0, "default gate: the paper's 30 m strobe loses most tracks once one-scan "
-                              "prediction errors are counted (table track_loss); at 50 m the trackers differ most"),
-    "kalman_q": assumption(0.25, "CV Kalman white-noise acceleration (m²/s³): σ_a ≈ 0.5 m/s² per 3 s scan, "
-                                  "between the 0.33 and 1.33 m/s² of the two turns"),
-    "imm": assumption("CV q 0.01, CT q 0.05 m²/s³, turn-rate q 1e-4 rad²/s³, switch 0.05 per scan",
-                      "textbook CV/CT IMM settings (Bar-Shalom et al. §11.7) for a 3 s scan"),
-    "tuning": assumption("per-input slopes and centres; Adam 0.05; soft gate T = 2 m; soft selector T = 0.25",
-                         "the paper's (a, c) = (5, 1.5) are an expert's choice; the temperatures keep the "
-                         "surrogate within a few % of the exact loss (table tuning)"),
+        "the paper's two speeds and everything between; the turn need not start at a scan",
+    ),
+    "gate": assumption(
+        50.0,
+        "default gate: the paper's 30 m strobe loses most tracks once one-scan "
+        "prediction errors are counted (table track_loss); at 50 m the trackers differ most",
+    ),
+    "kalman_q": assumption(
+        0.25,
+        "CV Kalman white-noise acceleration (m²/s³): σ_a ≈ 0.5 m/s² per 3 s scan, "
+        "between the 0.33 and 1.33 m/s² of the two turns",
+    ),
+    "imm": assumption(
+        "CV q 0.01, CT q 0.05 m²/s³, turn-rate q 1e-4 rad²/s³, switch 0.05 per scan",
+        "textbook CV/CT IMM settings (Bar-Shalom et al. §11.7) for a 3 s scan",
+    ),
+    "tuning": assumption(
+        "per-input slopes and centres; Adam 0.05; soft gate T = 2 m; soft selector T = 0.25",
+        "the paper's (a, c) = (5, 1.5) are an expert's choice; the temperatures keep the "
+        "surrogate within a few % of the exact loss (table tuning)",
+    ),
 }
-
 
 
 def per_run(cfg: Config) -> PerRun:
     """One track-loss run (speed and turn start drawn as in the study) for ``experiments sweep``."""
     space = loss_space(cfg)
-    return PerRun(loss_metric(cfg, {"fuzzy": paper_selector(cfg)}), nominal_params(cfg),
-                  {k: space[k] for k in ("speed", "turn_start")})
+    return PerRun(
+        loss_metric(cfg, {"fuzzy": paper_selector(cfg)}),
+        nominal_params(cfg),
+        {k: space[k] for k in ("speed", "turn_start")},
+    )
 
 
 def envelope_sweep(cfg: Config, progress: Callable[..., Any]) -> Any:
     """Monte Carlo of the reproduction statistics at each of ``cfg.speeds`` (common random numbers)."""
     design = mc.points(["speed"], np.asarray(cfg.speeds, float)[:, None])
-    return mc.sweep(envelope_metric(cfg), nominal_params(cfg), design, cfg.envelope_runs, cfg.seed,
-                    block_size=min(1000, cfg.envelope_runs), progress=progress, name="vessel_tracking.envelope")
+    return mc.sweep(
+        envelope_metric(cfg),
+        nominal_params(cfg),
+        design,
+        cfg.envelope_runs,
+        cfg.seed,
+        block_size=min(1000, cfg.envelope_runs),
+        progress=progress,
+        name="vessel_tracking.envelope",
+    )
 
 
-def loss_monte_carlo(cfg: Config, selectors: dict[str, Any], runs: int, progress: Callable[..., Any] | None = None,
-                     keep_runs: int = 0) -> Any:
+def loss_monte_carlo(
+    cfg: Config, selectors: dict[str, Any], runs: int, progress: Callable[..., Any] | None = None, keep_runs: int = 0
+) -> Any:
     """``lost/<tracker>`` events ``(G,)`` over ``cfg.gates`` and ``max_miss/<tracker>`` for ``runs`` runs."""
     for g in cfg.gates:
         if not (np.isfinite(g) and g > 0):
             raise ValueError(f"gates: every gate width must be > 0 m, got {cfg.gates!r}")
-    return mc.monte_carlo(loss_metric(cfg, selectors, cfg.gates), loss_space(cfg), runs, cfg.seed + 1,
-                          block_size=min(1000, runs), keep_runs=keep_runs, progress=progress,
-                          name="vessel_tracking.loss")
+    return mc.monte_carlo(
+        loss_metric(cfg, selectors, cfg.gates),
+        loss_space(cfg),
+        runs,
+        cfg.seed + 1,
+        block_size=min(1000, runs),
+        keep_runs=keep_runs,
+        progress=progress,
+        name="vessel_tracking.loss",
+    )
 
 
 def envelope(cfg: Config, env: Any) -> tuple[dict[str, float], list[dict[str, Any]]]:
@@ -160,9 +200,18 @@ def envelope(cfg: Config, env: Any) -> tuple[dict[str, float], list[dict[str, An
             metrics[name] = float(s.mean)
             target = paper.get(int(speed), np.nan)
             verdict = _claim(stem, speed, target).verdict(metrics[name]) if int(speed) in paper else "differs"
-            rows.append({"quantity": quantity, "speed_ms": speed, "metric": name, "paper": _target_str(target),
-                         "mc_mean": metrics[name], "single_run_p05": float(s.quantile(0.05)),
-                         "single_run_p95": float(s.quantile(0.95)), "within_30pct": verdict == "reproduced"})
+            rows.append(
+                {
+                    "quantity": quantity,
+                    "speed_ms": speed,
+                    "metric": name,
+                    "paper": _target_str(target),
+                    "mc_mean": metrics[name],
+                    "single_run_p05": float(s.quantile(0.05)),
+                    "single_run_p95": float(s.quantile(0.95)),
+                    "within_30pct": verdict == "reproduced",
+                }
+            )
     return metrics, rows
 
 
@@ -178,10 +227,22 @@ def loss_tables(cfg: Config, env: Any, loss: Any, names: tuple[str, ...]) -> tup
     for name in names:
         ev = loss[f"lost/{name}"]
         lo, hi = ev.interval(0.95)
-        curve += [{"tracker": name, "gate_m": g, "p_loss": float(ev.probability[i]), "wilson_low": float(lo[i]),
-                   "wilson_high": float(hi[i]), "runs": loss.runs} for i, g in enumerate(cfg.gates)]
-        row = {**curve[gi - len(cfg.gates)], "max_miss_mean_m": float(loss[f"max_miss/{name}"].mean),
-               "max_miss_p95_m": float(loss[f"max_miss/{name}"].quantile(0.95))}
+        curve += [
+            {
+                "tracker": name,
+                "gate_m": g,
+                "p_loss": float(ev.probability[i]),
+                "wilson_low": float(lo[i]),
+                "wilson_high": float(hi[i]),
+                "runs": loss.runs,
+            }
+            for i, g in enumerate(cfg.gates)
+        ]
+        row = {
+            **curve[gi - len(cfg.gates)],
+            "max_miss_mean_m": float(loss[f"max_miss/{name}"].mean),
+            "max_miss_p95_m": float(loss[f"max_miss/{name}"].quantile(0.95)),
+        }
         del row["runs"]
         for speed, res in zip(cfg.speeds, env.points):
             if f"rms_straight/{name}" in res.by_name:
@@ -194,17 +255,26 @@ def loss_tables(cfg: Config, env: Any, loss: Any, names: tuple[str, ...]) -> tup
 def sensitivity_rows(cfg: Config, key: jax.Array, runs: int) -> list[dict[str, Any]]:
     """Envelope under the alternatives named in ASSUMPTIONS (κ = 1, min t-norm), small batches."""
     rows = []
-    for label, change in (("paper defaults (κ = 2.17, product)", {}), ("κ = 1 (σ̂ = raw mean)", {"kappa": 1.0}),
-                          ("min t-norm", {"tnorm": "min"})):
+    for label, change in (
+        ("paper defaults (κ = 2.17, product)", {}),
+        ("κ = 1 (σ̂ = raw mean)", {"kappa": 1.0}),
+        ("min t-norm", {"tnorm": "min"}),
+    ):
         c = dataclasses.replace(cfg, **change)
         metric = jax.jit(jax.vmap(envelope_metric(c), in_axes=(0, None)))
         for speed in cfg.speeds:
             out = metric(jax.random.split(key, runs), {**nominal_params(c), "speed": speed})
-            rows.append({"variant": label, "speed_ms": speed, "runs": runs,
-                         "sigma_final_m": float(jnp.mean(out["sigma_final"])),
-                         "window_turn_median": float(jnp.mean(out["window_turn_median"])),
-                         "max_turn_m": float(jnp.mean(out["max_turn"]["fuzzy"])),
-                         "max_straight_m": float(jnp.mean(out["max_straight"]["fuzzy"]))})
+            rows.append(
+                {
+                    "variant": label,
+                    "speed_ms": speed,
+                    "runs": runs,
+                    "sigma_final_m": float(jnp.mean(out["sigma_final"])),
+                    "window_turn_median": float(jnp.mean(out["window_turn_median"])),
+                    "max_turn_m": float(jnp.mean(out["max_turn"]["fuzzy"])),
+                    "max_straight_m": float(jnp.mean(out["max_straight"]["fuzzy"])),
+                }
+            )
     return rows
 
 
@@ -218,21 +288,27 @@ def normalisation_note(kappa: float, metrics: dict[str, Any], sensitivity: list[
     peaks = (metrics["max_err_turn_10ms_m"], metrics["max_err_turn_20ms_m"])
     paper_peaks = (PAPER["max_turn"][10], PAPER["max_turn"][20])
     side = "below" if max(p - q for p, q in zip(peaks, paper_peaks)) < 0 else "around or above"
-    note = (f"where the reproduction differs: with σ̂ normalised to the 2-D RMS (κ = {kappa:.2f}) "
-            f"σ̂ = {metrics['sigma_hat_final_m']:.1f} m (paper ≈ {PAPER['sigma_final'][10]:g} m), turn windows "
-            f"{_pair((metrics['window_turn_10ms'], metrics['window_turn_20ms']), '.1f')} (paper "
-            f"{_target_str(PAPER['window_turn'][10])} / {_target_str(PAPER['window_turn'][20])}), "
-            f"turn peaks {_pair(peaks)} m, {side} the paper's {_pair(paper_peaks)} m; ")
+    note = (
+        f"where the reproduction differs: with σ̂ normalised to the 2-D RMS (κ = {kappa:.2f}) "
+        f"σ̂ = {metrics['sigma_hat_final_m']:.1f} m (paper ≈ {PAPER['sigma_final'][10]:g} m), turn windows "
+        f"{_pair((metrics['window_turn_10ms'], metrics['window_turn_20ms']), '.1f')} (paper "
+        f"{_target_str(PAPER['window_turn'][10])} / {_target_str(PAPER['window_turn'][20])}), "
+        f"turn peaks {_pair(peaks)} m, {side} the paper's {_pair(paper_peaks)} m; "
+    )
     raw = [r for r in sensitivity or () if r["variant"].startswith("κ = 1")]
     if len(raw) == 2:
-        note += (f"κ = 1 gives peaks of {_pair(r['max_turn_m'] for r in raw)} m but σ̂ = "
-                 f"{_pair((r['sigma_final_m'] for r in raw), '.1f')} m and windows "
-                 f"{_pair((r['window_turn_median'] for r in raw), '.1f')} (table sensitivity): no single noise "
-                 "normalisation fits every number of the single-run figure")
+        note += (
+            f"κ = 1 gives peaks of {_pair(r['max_turn_m'] for r in raw)} m but σ̂ = "
+            f"{_pair((r['sigma_final_m'] for r in raw), '.1f')} m and windows "
+            f"{_pair((r['window_turn_median'] for r in raw), '.1f')} (table sensitivity): no single noise "
+            "normalisation fits every number of the single-run figure"
+        )
     else:
         note += "the κ = 1 alternative is in table sensitivity (full runs only)"
-    return (note + "; the straight-leg peak at 20 m/s includes the scans just after the turn, while the "
-            "10-plot window still holds turn plots")
+    return (
+        note + "; the straight-leg peak at 20 m/s includes the scans just after the turn, while the "
+        "10-plot window still holds turn plots"
+    )
 
 
 def _figures(cfg: Config, env: Any, singles: list) -> dict[str, Any]:
@@ -245,8 +321,9 @@ def _figures(cfg: Config, env: Any, singles: list) -> dict[str, Any]:
         for name in BASE_TRACKERS:
             ax1[0, i].plot(times, res[f"err/{name}"].mean, label=f"{name} (MC mean)")
         ax1[0, i].plot(times, single["err"]["fuzzy"], "k:", label="fuzzy, one run")
-        ax1[0, i].axhline(PAPER["max_turn"].get(int(speed), np.nan), color="r", ls="--", lw=0.8,
-                          label="paper's turn peak")
+        ax1[0, i].axhline(
+            PAPER["max_turn"].get(int(speed), np.nan), color="r", ls="--", lw=0.8, label="paper's turn peak"
+        )
         ax1[0, i].set(title=f"{speed:g} m/s: position error ε", xlabel="t, s", ylabel="ε, m")
         ax2[0, i].step(times, single["window"], where="post", label="one run")
         ax2[0, i].plot(times, res["window"].mean, label="MC mean")
@@ -272,21 +349,36 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     t0 = time.perf_counter()
     env = envelope_sweep(cfg, progress)
     one = jax.jit(envelope_metric(cfg))
-    singles = [(simulate(cfg, k_single, p), jax.tree_util.tree_map(np.asarray, one(k_single, p)))
-               for p in ({**nominal_params(cfg), "speed": v} for v in cfg.speeds)]
+    singles = [
+        (simulate(cfg, k_single, p), jax.tree_util.tree_map(np.asarray, one(k_single, p)))
+        for p in ({**nominal_params(cfg), "speed": v} for v in cfg.speeds)
+    ]
     env_s = time.perf_counter() - t0
 
     problem, exact = selector_problem(cfg, k_tune, cfg.tune_runs)
     tuning = stages.gradient_tuning(  # reverse mode: one gradient ≈ 3 losses; forward mode needs 18
-        problem, steps=cfg.tune_steps, optimizer=optax.adam(cfg.learning_rate), mode="reverse",
-        sims_per_eval=cfg.tune_runs, loss_label="surrogate P(loss) at the default gate", progress=progress)
+        problem,
+        steps=cfg.tune_steps,
+        optimizer=optax.adam(cfg.learning_rate),
+        mode="reverse",
+        sims_per_eval=cfg.tune_runs,
+        loss_label="surrogate P(loss) at the default gate",
+        progress=progress,
+    )
     res = tuning.result
     tuned = with_memberships(sel0, res.params)
-    tune_row = {"training_runs": cfg.tune_runs, "steps": res.n_steps, "surrogate_initial": float(res.history.loss[0]),
-                "surrogate_tuned": res.loss, "exact_initial_train": float(exact(sel0)),
-                "exact_tuned_train": float(exact(tuned)), "wall_s": res.wall_s, "compile_s": res.compile_s,
-                "slopes": [round(float(v), 3) for v in tuned.slopes],
-                "centres": [round(float(v), 3) for v in tuned.centres]}
+    tune_row = {
+        "training_runs": cfg.tune_runs,
+        "steps": res.n_steps,
+        "surrogate_initial": float(res.history.loss[0]),
+        "surrogate_tuned": res.loss,
+        "exact_initial_train": float(exact(sel0)),
+        "exact_tuned_train": float(exact(tuned)),
+        "wall_s": res.wall_s,
+        "compile_s": res.compile_s,
+        "slopes": [round(float(v), 3) for v in tuned.slopes],
+        "centres": [round(float(v), 3) for v in tuned.centres],
+    }
 
     names = BASE_TRACKERS + ("fuzzy_tuned",)
     t0 = time.perf_counter()
@@ -298,28 +390,63 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     by = {r["tracker"]: r for r in comparison}
     mean_over = lambda stat: float(np.mean([r[stat].mean for r in env.points]))  # noqa: E731
     metrics = {
-        **env_metrics, "rmse_straight_m": mean_over("rms_straight/fuzzy"),
-        "max_err_straight_m": mean_over("max_straight/fuzzy"), "window_straight_median": mean_over(
-            "window_straight_median"), "sigma_hat_final_m": mean_over("sigma_final"),
+        **env_metrics,
+        "rmse_straight_m": mean_over("rms_straight/fuzzy"),
+        "max_err_straight_m": mean_over("max_straight/fuzzy"),
+        "window_straight_median": mean_over("window_straight_median"),
+        "sigma_hat_final_m": mean_over("sigma_final"),
         "sigma_settle_scans": mean_over("sigma_settle_scan"),
-        **{f"p_loss_{n}{suffix}": by[n][col] for n in names
-           for suffix, col in (("", "p_loss"), ("_wilson_low", "wilson_low"), ("_wilson_high", "wilson_high"))},
-        "gate_m": cfg.gate, "envelope_within_30pct": int(sum(r["within_30pct"] for r in rows)),
-        "envelope_checks": len(rows), "loss_runs": cfg.runs, "envelope_runs_per_speed": cfg.envelope_runs,
-        "envelope_wall_s": env_s, "loss_wall_s": loss_s, "tune_wall_s": res.wall_s + res.compile_s}
-    tables = {"envelope": rows, "comparison": comparison, "track_loss": curve,
-              "tuning": [tune_row],
-              "single_run": [{"t_s": float(t), **{f"{q}_{int(v)}ms": float(s[q][i]) for v, (_, s) in
-                                                  zip(cfg.speeds, singles) for q in ("window", "sigma_hat")},
-                              **{f"err_{n}_{int(v)}ms": float(s["err"][n][i]) for v, (_, s) in
-                                 zip(cfg.speeds, singles) for n in BASE_TRACKERS}}
-                             for i, t in enumerate(singles[0][0].times)]}
+        **{
+            f"p_loss_{n}{suffix}": by[n][col]
+            for n in names
+            for suffix, col in (("", "p_loss"), ("_wilson_low", "wilson_low"), ("_wilson_high", "wilson_high"))
+        },
+        "gate_m": cfg.gate,
+        "envelope_within_30pct": int(sum(r["within_30pct"] for r in rows)),
+        "envelope_checks": len(rows),
+        "loss_runs": cfg.runs,
+        "envelope_runs_per_speed": cfg.envelope_runs,
+        "envelope_wall_s": env_s,
+        "loss_wall_s": loss_s,
+        "tune_wall_s": res.wall_s + res.compile_s,
+    }
+    tables = {
+        "envelope": rows,
+        "comparison": comparison,
+        "track_loss": curve,
+        "tuning": [tune_row],
+        "single_run": [
+            {
+                "t_s": float(t),
+                **{
+                    f"{q}_{int(v)}ms": float(s[q][i])
+                    for v, (_, s) in zip(cfg.speeds, singles)
+                    for q in ("window", "sigma_hat")
+                },
+                **{
+                    f"err_{n}_{int(v)}ms": float(s["err"][n][i])
+                    for v, (_, s) in zip(cfg.speeds, singles)
+                    for n in BASE_TRACKERS
+                },
+            }
+            for i, t in enumerate(singles[0][0].times)
+        ],
+    }
     if cfg.sensitivity_runs:
         tables["sensitivity"] = sensitivity_rows(cfg, k_sens, cfg.sensitivity_runs)
     curves = {n: (loss[f"lost/{n}"].probability, *loss[f"lost/{n}"].interval(0.95)) for n in names}
-    figs = {**_figures(cfg, env, singles), "track_loss_vs_gate": figures.probability_curves(
-        np.asarray(cfg.gates), curves, x_label="gate radius, m", y_label="P(track lost) (Wilson 95 %)",
-        title=f"track loss vs gate, {loss.runs} runs per point", log=True, mark=cfg.gate)}
+    figs = {
+        **_figures(cfg, env, singles),
+        "track_loss_vs_gate": figures.probability_curves(
+            np.asarray(cfg.gates),
+            curves,
+            x_label="gate radius, m",
+            y_label="P(track lost) (Wilson 95 %)",
+            title=f"track loss vs gate, {loss.runs} runs per point",
+            log=True,
+            mark=cfg.gate,
+        ),
+    }
     notes = [
         f"reproduction: {cfg.envelope_runs} Monte-Carlo runs per speed plus one seeded run (figures); the "
         "paper's values are single runs read from Fig. 5, compared with a ±30 % band",
@@ -330,7 +457,8 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         f"training batch {tune_row['exact_initial_train']:.3f} → {tune_row['exact_tuned_train']:.3f}",
         normalisation_note(cfg.kappa, metrics, tables.get("sensitivity")),
         f"at the {cfg.gate:g} m gate: P(loss) fuzzy {metrics['p_loss_fuzzy']:.4f}, tuned "
-        f"{metrics['p_loss_fuzzy_tuned']:.4f}, IMM {metrics['p_loss_imm']:.4f}, window 5 {metrics['p_loss_window5']:.4f}",
+        f"{metrics['p_loss_fuzzy_tuned']:.4f}, IMM {metrics['p_loss_imm']:.4f}, "
+        f"window 5 {metrics['p_loss_window5']:.4f}",
     ]
     return stages.merge(stages.Stage(tables=tables, figures=figs), tuning, metrics=metrics, notes=notes)
 
@@ -338,7 +466,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
 STUDY = Study(
     name="vessel_tracking",
     description="Radar tracking of a turning vessel: α–β window bank with a Sugeno window selector "
-                "(seed 003), track-loss Monte Carlo vs Kalman/IMM, gradient-tuned selector",
+    "(seed 003), track-loss Monte Carlo vs Kalman/IMM, gradient-tuned selector",
     config=Config,
     presets=PRESETS,
     claims=CLAIMS,

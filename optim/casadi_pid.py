@@ -35,8 +35,14 @@ def casadi_loss(problem: PIDTuning) -> ca.Function:
     x = ca.SX.sym("x", 2)
     u = ca.SX.sym("u")
     ode = ca.vertcat(x[1], (K * u - x[0] - (T1 + T2) * x[1]) / (T1 * T2))
-    plant = ca.integrator("plant", "rk", {"x": x, "p": u, "ode": ode}, 0.0, ts,
-                          {"number_of_finite_elements": int(problem.substeps), "simplify": True})
+    plant = ca.integrator(
+        "plant",
+        "rk",
+        {"x": x, "p": u, "ode": ode},
+        0.0,
+        ts,
+        {"number_of_finite_elements": int(problem.substeps), "simplify": True},
+    )
 
     # one tick: state z = [y, ẏ, integral, derivative filter, previous −y], cost accumulated
     z = ca.MX.sym("z", 5)
@@ -135,8 +141,12 @@ def ipopt_tune(
 
     record = _Record()
     opts = {
-        "ipopt.max_iter": int(max_iter), "ipopt.tol": float(tol), "ipopt.print_level": int(print_level),
-        "ipopt.hessian_approximation": hessian, "ipopt.sb": "yes", "print_time": False,
+        "ipopt.max_iter": int(max_iter),
+        "ipopt.tol": float(tol),
+        "ipopt.print_level": int(print_level),
+        "ipopt.hessian_approximation": hessian,
+        "ipopt.sb": "yes",
+        "print_time": False,
         "iteration_callback": record,
     }
     solver = ca.nlpsol("ipopt", "ipopt", {"x": gsym, "f": f(gsym)}, opts)
@@ -162,5 +172,5 @@ def ipopt_tune(
         compile_s=float(compile_s),
         converged=stats.get("return_status") in ("Solve_Succeeded", "Solved_To_Acceptable_Level"),
         message=f"IPOPT: {stats.get('return_status', '?')} after {stats.get('iter_count', '?')} iterations "
-                f"({n_f} f, {n_grad} gradient, {n_hess} Hessian evaluations)",
+        f"({n_f} f, {n_grad} gradient, {n_hess} Hessian evaluations)",
     )

@@ -68,9 +68,19 @@ def _params_of(result: Any, problem: Problem | None = None) -> Any:
         return str(x)
 
 
-def standard_tuners(problem: Problem, budget: int, names: Sequence[str] = ("gradient", "pso", "random"), *,
-                    key: Any = None, learning_rate: float = 0.05, n_starts: int = 4, init_spread: float = 1.0,
-                    n_particles: int = 32, batch_size: int = 256, progress: Any = False) -> dict[str, Callable[[], Any]]:
+def standard_tuners(
+    problem: Problem,
+    budget: int,
+    names: Sequence[str] = ("gradient", "pso", "random"),
+    *,
+    key: Any = None,
+    learning_rate: float = 0.05,
+    n_starts: int = 4,
+    init_spread: float = 1.0,
+    n_particles: int = 32,
+    batch_size: int = 256,
+    progress: Any = False,
+) -> dict[str, Callable[[], Any]]:
     """Zero-argument runs of the standard tuners on ``problem``, each given ``budget`` simulations.
 
     * ``gradient``: :func:`optim.tune`, Adam(``learning_rate``) in the space's reparametrisation,
@@ -92,12 +102,20 @@ def standard_tuners(problem: Problem, budget: int, names: Sequence[str] = ("grad
     evals = int(budget) // problem.sims_per_eval
     d = problem.space.dim
     makers = {
-        "gradient": lambda: tune(problem, optimizer=optax.adam(learning_rate), steps=evals // n_starts,
-                                 n_starts=n_starts, key=key, init_spread=init_spread, progress=progress),
+        "gradient": lambda: tune(
+            problem,
+            optimizer=optax.adam(learning_rate),
+            steps=evals // n_starts,
+            n_starts=n_starts,
+            key=key,
+            init_spread=init_spread,
+            progress=progress,
+        ),
         "pso": lambda: pso(problem, n_particles=n_particles, n_iters=evals // n_particles, key=key, progress=progress),
         "random": lambda: random_search(problem, n=evals, key=key, batch_size=batch_size),
-        "grid": lambda: grid_search(problem, points_per_dim=int(np.floor(evals ** (1 / d) + 1e-9)),
-                                    batch_size=batch_size),
+        "grid": lambda: grid_search(
+            problem, points_per_dim=int(np.floor(evals ** (1 / d) + 1e-9)), batch_size=batch_size
+        ),
     }
     unknown = [n for n in names if n not in makers]
     if unknown:
@@ -105,14 +123,21 @@ def standard_tuners(problem: Problem, budget: int, names: Sequence[str] = ("grad
     too_small = {"gradient": evals < n_starts, "pso": evals < n_particles, "random": evals < 1, "grid": evals < 1}
     small = [n for n in names if too_small[n]]
     if small:
-        raise ValueError(f"budget: {budget} simulations ({evals} loss evaluations of {problem.sims_per_eval} "
-                         f"scenario(s)) is too small for {', '.join(small)}")
+        raise ValueError(
+            f"budget: {budget} simulations ({evals} loss evaluations of {problem.sims_per_eval} "
+            f"scenario(s)) is too small for {', '.join(small)}"
+        )
     return {n: makers[n] for n in names}
 
 
-def compare(runs: dict[str, Callable[[], Any]] | Problem,
-            on_done: Callable[[str], Any] | None = None, *, tuners: Sequence[str] | dict[str, Any] | None = None,
-            budget: int | None = None, **options: Any) -> Comparison:
+def compare(
+    runs: dict[str, Callable[[], Any]] | Problem,
+    on_done: Callable[[str], Any] | None = None,
+    *,
+    tuners: Sequence[str] | dict[str, Any] | None = None,
+    budget: int | None = None,
+    **options: Any,
+) -> Comparison:
     """Run each tuner once and collect its best-so-far curve.
 
     ``runs``: name → zero-argument callable returning a :class:`~optim.results.TuneResult`; or a
@@ -125,8 +150,11 @@ def compare(runs: dict[str, Callable[[], Any]] | Problem,
     if problem is not None:
         if budget is None:
             raise ValueError("budget: required when comparing tuners on a Problem (simulations per tuner)")
-        spec = dict.fromkeys(("gradient", "pso", "random")) if tuners is None else (
-            dict(tuners) if isinstance(tuners, dict) else dict.fromkeys(tuners))
+        spec = (
+            dict.fromkeys(("gradient", "pso", "random"))
+            if tuners is None
+            else (dict(tuners) if isinstance(tuners, dict) else dict.fromkeys(tuners))
+        )
         standard = standard_tuners(problem, budget, [n for n, v in spec.items() if v is None], **options)
         runs = {n: standard[n] if v is None else (lambda v=v: v(problem, budget)) for n, v in spec.items()}
     elif tuners is not None or budget is not None or options:
@@ -143,15 +171,21 @@ def compare(runs: dict[str, Callable[[], Any]] | Problem,
         if on_done is not None:
             on_done(name)
         h = res.history
-        curves[name] = Curve(np.asarray(h.sims, float), np.asarray(h.wall_s, float),
-                             np.asarray(h.best_loss, float))
+        curves[name] = Curve(np.asarray(h.sims, float), np.asarray(h.wall_s, float), np.asarray(h.best_loss, float))
         results[name] = res
-        rows.append({
-            "tuner": name, "best_loss": float(res.loss), "sims": int(res.n_sims),
-            "wall_s": float(res.wall_s), "compile_s": float(getattr(res, "compile_s", 0.0)),
-            "total_s": total, "params": _params_of(res, problem), "converged": bool(getattr(res, "converged", False)),
-            "message": getattr(res, "message", ""),
-        })
+        rows.append(
+            {
+                "tuner": name,
+                "best_loss": float(res.loss),
+                "sims": int(res.n_sims),
+                "wall_s": float(res.wall_s),
+                "compile_s": float(getattr(res, "compile_s", 0.0)),
+                "total_s": total,
+                "params": _params_of(res, problem),
+                "converged": bool(getattr(res, "converged", False)),
+                "message": getattr(res, "message", ""),
+            }
+        )
     common_sims = min(float(c.sims[-1]) for c in curves.values())
     common_s = min(float(c.seconds[-1]) for c in curves.values())
     for row in rows:
@@ -176,8 +210,9 @@ def comparison_metrics(comparison: Comparison) -> dict[str, float]:
     return out
 
 
-def plot_comparison(comparison: Comparison, *, reference: float | None = None, title: str | None = None,
-                    loss_label: str = "loss"):
+def plot_comparison(
+    comparison: Comparison, *, reference: float | None = None, title: str | None = None, loss_label: str = "loss"
+):
     """Figure with best loss vs simulations and vs seconds, one line per tuner.
 
     With ``reference`` (e.g. a known optimum) the curves show ``best − reference`` on a log scale

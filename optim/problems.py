@@ -76,12 +76,14 @@ class PIDTuning:
     def closed_loop(self, gains: jax.Array) -> ClosedLoop:
         """The closed loop for gains ``(3,)`` (``kp, ki, kd``)."""
         g = jnp.asarray(gains)
-        params = PIDParams(kp=g[0], ki=g[1], kd=g[2], tf=jnp.asarray(self.tf, g.dtype),
-                           anti_windup="none", derivative_on="measurement")
+        params = PIDParams(
+            kp=g[0], ki=g[1], kd=g[2], tf=jnp.asarray(self.tf, g.dtype), anti_windup="none", derivative_on="measurement"
+        )
         template = pid(kp=1.0, tf=self.tf, anti_windup="none", derivative_on="measurement")
         plant = static_plant(StaticParams(K=self.K, T1=self.T1, T2=self.T2))
-        return ClosedLoop(plant, dataclasses.replace(template, params=params),
-                          reference=Step(jnp.asarray(self.reference, g.dtype)))
+        return ClosedLoop(
+            plant, dataclasses.replace(template, params=params), reference=Step(jnp.asarray(self.reference, g.dtype))
+        )
 
     def loss(self, gains: jax.Array) -> jax.Array:
         """``J = Σ_k (e_k² + ρ u_k²)·ts`` over the ticks of the horizon; gains ``(3,)``."""

@@ -70,8 +70,9 @@ class PSOConfig:
             if not np.isfinite(v) or v < 0:
                 raise ValueError(f"{name}: must be finite and non-negative, got {v!r}")
         if self.velocity_clamp is not None and not (np.isfinite(self.velocity_clamp) and self.velocity_clamp > 0):
-            raise ValueError("velocity_clamp: must be positive (a fraction of hi − lo) or None, "
-                             f"got {self.velocity_clamp!r}")
+            raise ValueError(
+                f"velocity_clamp: must be positive (a fraction of hi − lo) or None, got {self.velocity_clamp!r}"
+            )
         inertia = self.inertia
         if isinstance(inertia, tuple):
             if len(inertia) != 2 or not all(np.isfinite(v) for v in inertia):
@@ -140,8 +141,9 @@ def handle_bounds(pos: jax.Array, vel: jax.Array, lo: jax.Array, hi: jax.Array, 
     return clipped, jnp.where(clipped != pos, 0.0, vel)
 
 
-def pso_step(losses_of: Callable[[jax.Array], jax.Array], state: SwarmState, lo: jax.Array,
-             hi: jax.Array, cfg: PSOConfig) -> tuple[SwarmState, jax.Array]:
+def pso_step(
+    losses_of: Callable[[jax.Array], jax.Array], state: SwarmState, lo: jax.Array, hi: jax.Array, cfg: PSOConfig
+) -> tuple[SwarmState, jax.Array]:
     """Evaluate the swarm (``losses_of(positions (n, d)) -> (n,)``), update bests, move.
 
     Returns the new state and the best loss found so far.
@@ -150,8 +152,9 @@ def pso_step(losses_of: Callable[[jax.Array], jax.Array], state: SwarmState, lo:
     return new, best
 
 
-def _step(losses_of: Callable[[jax.Array], jax.Array], state: SwarmState, lo: jax.Array, hi: jax.Array,
-          cfg: PSOConfig) -> tuple[SwarmState, jax.Array, jax.Array]:
+def _step(
+    losses_of: Callable[[jax.Array], jax.Array], state: SwarmState, lo: jax.Array, hi: jax.Array, cfg: PSOConfig
+) -> tuple[SwarmState, jax.Array, jax.Array]:
     """:func:`pso_step`, also returning the lowest loss of this iteration's positions."""
     losses = losses_of(state.position)
     losses = jnp.where(jnp.isfinite(losses), losses, jnp.inf)
@@ -164,8 +167,7 @@ def _step(losses_of: Callable[[jax.Array], jax.Array], state: SwarmState, lo: ja
     r1 = jax.random.uniform(k1, shape, state.position.dtype)
     r2 = jax.random.uniform(k2, shape, state.position.dtype)
     w = cfg.inertia_at(state.iteration)
-    vel = (w * state.velocity + cfg.c1 * r1 * (pbest_pos - state.position)
-           + cfg.c2 * r2 * (nbest - state.position))
+    vel = w * state.velocity + cfg.c1 * r1 * (pbest_pos - state.position) + cfg.c2 * r2 * (nbest - state.position)
     if cfg.velocity_clamp is not None:
         vmax = _vmax(cfg, lo, hi)
         vel = jnp.clip(vel, -vmax, vmax)
@@ -175,8 +177,9 @@ def _step(losses_of: Callable[[jax.Array], jax.Array], state: SwarmState, lo: ja
 
 
 @functools.partial(jax.jit, static_argnames=("loss", "batched", "cfg", "chunk"))
-def _jitted_steps(state: SwarmState, lo: jax.Array, hi: jax.Array, *, loss: Callable, batched: bool,
-                  cfg: PSOConfig, chunk: int) -> tuple[SwarmState, tuple[jax.Array, jax.Array]]:
+def _jitted_steps(
+    state: SwarmState, lo: jax.Array, hi: jax.Array, *, loss: Callable, batched: bool, cfg: PSOConfig, chunk: int
+) -> tuple[SwarmState, tuple[jax.Array, jax.Array]]:
     """``chunk`` iterations in one call (a scan); compiled once per (loss, settings), reused."""
     losses_of = loss if batched else jax.vmap(loss)
 
@@ -192,8 +195,15 @@ def _chunk_size(n_iters: int, iters_per_call: int) -> int:
     return max(c for c in range(1, min(iters_per_call, n_iters) + 1) if n_iters % c == 0)
 
 
-def swarm_convergence(state: SwarmState, best: np.ndarray, lo: np.ndarray, hi: np.ndarray, tol: float,
-                      patience: int | None, rtol: float = 1e-12) -> tuple[bool, str]:
+def swarm_convergence(
+    state: SwarmState,
+    best: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    tol: float,
+    patience: int | None,
+    rtol: float = 1e-12,
+) -> tuple[bool, str]:
     """``(converged, why)``: the personal bests collapsed (spread ``max_i (max − min)/(hi − lo) < tol``
     over every dimension) or the best loss did not improve by more than ``rtol`` (relative) over
     the last ``patience`` iterations."""
@@ -261,8 +271,17 @@ def pso(
     lo, hi = as_box(lo, hi)
     if isinstance(inertia, list):
         inertia = tuple(inertia)
-    cfg = PSOConfig(n_particles=n_particles, n_iters=n_iters, topology=topology, neighbors=neighbors,
-                    inertia=inertia, c1=c1, c2=c2, bounds=bounds, velocity_clamp=velocity_clamp)
+    cfg = PSOConfig(
+        n_particles=n_particles,
+        n_iters=n_iters,
+        topology=topology,
+        neighbors=neighbors,
+        inertia=inertia,
+        c1=c1,
+        c2=c2,
+        bounds=bounds,
+        velocity_clamp=velocity_clamp,
+    )
     sims_per_eval = check_int("sims_per_eval", 1 if sims_per_eval is None else sims_per_eval)
     if patience is not None:
         patience = check_int("patience", patience)
@@ -283,17 +302,18 @@ def pso(
     try:
         for i in range(0, cfg.n_iters, chunk):
             state, (best_i, now_i) = _jitted_steps(state, lo, hi, **static)
-            best[i:i + chunk] = np.asarray(best_i)
-            now_min[i:i + chunk] = np.asarray(now_i)
+            best[i : i + chunk] = np.asarray(best_i)
+            now_min[i : i + chunk] = np.asarray(now_i)
             now = time.perf_counter() - start
-            wall[i:i + chunk] = last + (now - last) * np.arange(1, chunk + 1) / chunk
+            wall[i : i + chunk] = last + (now - last) * np.arange(1, chunk + 1) / chunk
             last = now
             bar.update(chunk)
             postfix(bar, f"best {best[i + chunk - 1]:.6g}")
     finally:
         bar.close()
-    check_some_loss_finite(best[-1], f"{cfg.n_particles} particles × {cfg.n_iters} iterations",
-                           "check the loss over the box lo..hi")
+    check_some_loss_finite(
+        best[-1], f"{cfg.n_particles} particles × {cfg.n_iters} iterations", "check the loss over the box lo..hi"
+    )
     i_best = int(jnp.argmin(state.pbest_loss))
     z_best = state.pbest_position[i_best]
     n_sims = cfg.n_particles * cfg.n_iters * sims_per_eval

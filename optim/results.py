@@ -98,7 +98,7 @@ def check_some_loss_finite(best_loss: float, where: str, hint: str = "") -> None
     ``where`` says what was evaluated (``"30 particles × 100 iterations"``), ``hint`` what to check.
     """
     if not np.isfinite(best_loss):
-        raise ValueError(f"loss: not finite (NaN/inf) at any evaluated point ({where}); nothing to "
-                         f"return{'; ' + hint if hint else ''}")
-
-
+        raise ValueError(
+            f"loss: not finite (NaN/inf) at any evaluated point ({where}); nothing to "
+            f"return{'; ' + hint if hint else ''}"
+        )

@@ -43,8 +43,17 @@ def grid_points(axes: jax.Array, counts: tuple[int, ...], flat_index: jax.Array)
 
 
 @functools.partial(jax.jit, static_argnames=("loss", "grid", "batch_size", "n"))
-def _best_of_batch(b: jax.Array, source: jax.Array, lo: jax.Array, hi: jax.Array, *, loss: Callable,
-                   grid: tuple[int, ...] | None, batch_size: int, n: int) -> tuple[jax.Array, jax.Array]:
+def _best_of_batch(
+    b: jax.Array,
+    source: jax.Array,
+    lo: jax.Array,
+    hi: jax.Array,
+    *,
+    loss: Callable,
+    grid: tuple[int, ...] | None,
+    batch_size: int,
+    n: int,
+) -> tuple[jax.Array, jax.Array]:
     """Best ``(loss, x)`` of batch ``b``: random points (``grid=None``, ``source`` a PRNG key) or
     grid points (``source`` the axis values of :func:`grid_axes`)."""
     if grid is None:
@@ -58,9 +67,18 @@ def _best_of_batch(b: jax.Array, source: jax.Array, lo: jax.Array, hi: jax.Array
     return vals[i], x[i]
 
 
-def _run_batches(loss: Callable[[jax.Array], jax.Array], source: jax.Array, lo: jax.Array, hi: jax.Array,
-                 grid: tuple[int, ...] | None, n: int, batch_size: int, sims_per_eval: int,
-                 label: str, problem: Problem | None) -> TuneResult:
+def _run_batches(
+    loss: Callable[[jax.Array], jax.Array],
+    source: jax.Array,
+    lo: jax.Array,
+    hi: jax.Array,
+    grid: tuple[int, ...] | None,
+    n: int,
+    batch_size: int,
+    sims_per_eval: int,
+    label: str,
+    problem: Problem | None,
+) -> TuneResult:
     """Evaluate ``ceil(n / batch_size)`` batches, keeping the best point."""
     n_batches = -(-n // batch_size)
     static = dict(loss=loss, grid=grid, batch_size=batch_size, n=n)
@@ -83,10 +101,17 @@ def _run_batches(loss: Callable[[jax.Array], jax.Array], source: jax.Array, lo: 
     sims = np.minimum(np.arange(1, n_batches + 1) * batch_size, n) * sims_per_eval
     message = f"{label}: {n} points in {n_batches} batch(es) (a search has no convergence test)"
     return TuneResult(
-        params=problem.space.from_search(best_x) if problem is not None else best_x, loss=float(best_loss),
-        history=History(hist_best, sims, hist_wall, loss=hist_batch), n_sims=int(n * sims_per_eval),
-        wall_s=float(hist_wall[-1]), compile_s=float(compile_s), converged=False, message=message, u=best_x,
-        n_steps=n_batches, mode=label,
+        params=problem.space.from_search(best_x) if problem is not None else best_x,
+        loss=float(best_loss),
+        history=History(hist_best, sims, hist_wall, loss=hist_batch),
+        n_sims=int(n * sims_per_eval),
+        wall_s=float(hist_wall[-1]),
+        compile_s=float(compile_s),
+        converged=False,
+        message=message,
+        u=best_x,
+        n_steps=n_batches,
+        mode=label,
     )
 
 

@@ -110,7 +110,8 @@ def _ranking(f, v, m, bf, bv, bm, tol, rtol, feasible_first):
     feas, bfeas = v <= tol, bv <= tol
     better = jnp.where(feas & bfeas, f < bf, jnp.where(feas, True, jnp.where(bfeas, False, m < bm)))
     improved = jnp.where(
-        feas & bfeas, f < bf - rtol * jnp.abs(bf),
+        feas & bfeas,
+        f < bf - rtol * jnp.abs(bf),
         jnp.where(feas, ~bfeas, jnp.where(bfeas, False, m < bm - rtol * jnp.abs(bm))),
     )
     return better, improved
@@ -197,8 +198,9 @@ def _make_step(objective: Callable, opt: optax.GradientTransformation, reparam: 
         better, improved = _ranking(f, viol, merit, c.best_f, c.best_v, c.best_m, cfg.tol, cfg.rtol, cfg.al)
         keep = running & finite & better
         if extra_args:
-            updates, new_state = opt.update(grad, c.opt_state, c.u, value=j, grad=grad,
-                                            value_fn=lambda uu: objective(uu, c.lam)[0])
+            updates, new_state = opt.update(
+                grad, c.opt_state, c.u, value=j, grad=grad, value_fn=lambda uu: objective(uu, c.lam)[0]
+            )
         else:
             updates, new_state = opt.update(grad, c.opt_state, c.u)
         move = running & finite
@@ -232,8 +234,9 @@ def _make_step(objective: Callable, opt: optax.GradientTransformation, reparam: 
     return tuner_step
 
 
-def _initial_carry(key: jax.Array, u0: Any, opt: optax.GradientTransformation, n_starts: int,
-                   spread: float, m_constraints: int) -> TunerState:
+def _initial_carry(
+    key: jax.Array, u0: Any, opt: optax.GradientTransformation, n_starts: int, spread: float, m_constraints: int
+) -> TunerState:
     """Start 0 is ``u0``, the others ``u0 + spread·N(0, 1)``; strong dtypes so the step compiles once."""
     v0, unravel = ravel_pytree(u0)
     noise = spread * jax.random.normal(key, (n_starts, v0.size), v0.dtype)
@@ -244,7 +247,9 @@ def _initial_carry(key: jax.Array, u0: Any, opt: optax.GradientTransformation, n
         opt_state=jax.vmap(opt.init)(u_starts),
         lam=jnp.zeros((n_starts, m_constraints), v0.dtype),
         best_u=u_starts,
-        best_f=inf, best_v=inf, best_m=inf,
+        best_f=inf,
+        best_v=inf,
+        best_m=inf,
         best_step=jnp.full((n_starts,), -1, jnp.int32),
         alive=jnp.ones((n_starts,), bool),
         active=jnp.ones((n_starts,), bool),
@@ -281,24 +286,36 @@ class _Resolved(NamedTuple):
     name: str
 
 
-def _resolve(loss: Any, params0: Any, reparam: Any, constraints: Any, sims_per_eval: Any,
-             penalty_weight: Any) -> _Resolved:
+def _resolve(
+    loss: Any, params0: Any, reparam: Any, constraints: Any, sims_per_eval: Any, penalty_weight: Any
+) -> _Resolved:
     """A Problem's defaults (``space.init``, ``space.reparam``, its constraints, scenarios per loss
     evaluation, penalty weight), each overridden by an argument given explicitly; a plain loss
     callable keeps the old signature's defaults."""
     if isinstance(loss, Problem):
         pb = loss
-        return _Resolved(pb.loss, pb.space.init if params0 is None else params0,
-                         pb.space.reparam if reparam is None else reparam,
-                         pb.constraints if constraints is None else constraints,
-                         pb.sims_per_eval if sims_per_eval is None else sims_per_eval,
-                         pb.penalty_weight if penalty_weight is None else penalty_weight, pb.name)
+        return _Resolved(
+            pb.loss,
+            pb.space.init if params0 is None else params0,
+            pb.space.reparam if reparam is None else reparam,
+            pb.constraints if constraints is None else constraints,
+            pb.sims_per_eval if sims_per_eval is None else sims_per_eval,
+            pb.penalty_weight if penalty_weight is None else penalty_weight,
+            pb.name,
+        )
     if not callable(loss):
         raise ValueError(f"loss: must be a Problem or callable, got {type(loss).__name__}")
     if params0 is None:
         raise ValueError("params0: required when tuning a plain loss function (a Problem supplies space.init)")
-    return _Resolved(loss, params0, reparam, constraints, 1 if sims_per_eval is None else sims_per_eval,
-                     100.0 if penalty_weight is None else penalty_weight, getattr(loss, "__name__", "loss"))
+    return _Resolved(
+        loss,
+        params0,
+        reparam,
+        constraints,
+        1 if sims_per_eval is None else sims_per_eval,
+        100.0 if penalty_weight is None else penalty_weight,
+        getattr(loss, "__name__", "loss"),
+    )
 
 
 def _as_float_tree(params0: Any) -> Any:
@@ -343,8 +360,7 @@ def gradient_tuner(
         patience = check_int("patience", patience)
     spread = _check_number("init_spread", init_spread, allow_zero=True)
     if constraint_method not in ("penalty", "augmented_lagrangian"):
-        raise ValueError("constraint_method: must be 'penalty' or 'augmented_lagrangian', "
-                         f"got {constraint_method!r}")
+        raise ValueError(f"constraint_method: must be 'penalty' or 'augmented_lagrangian', got {constraint_method!r}")
     if mode not in ("auto", "forward", "reverse"):
         raise ValueError(f"mode: must be 'auto', 'forward' or 'reverse', got {mode!r}")
     opt = optax.adam(1e-2) if optimizer is None else optimizer
@@ -397,8 +413,9 @@ class _Records(NamedTuple):
     wall: list
 
 
-def _run_steps(step_fn: Callable, carry: TunerState, steps: int, cfg: _Settings,
-               callback: Callable | None, bar: Any) -> tuple[TunerState, _Records, str, bool]:
+def _run_steps(
+    step_fn: Callable, carry: TunerState, steps: int, cfg: _Settings, callback: Callable | None, bar: Any
+) -> tuple[TunerState, _Records, str, bool]:
     """The host loop: one jitted step per iteration, records, callback and stopping.
 
     Returns ``(state, records, reason, stopped_by_callback)``."""
@@ -427,8 +444,9 @@ def _run_steps(step_fn: Callable, carry: TunerState, steps: int, cfg: _Settings,
             if not np.all(alive):
                 reason = f"stopped at step {k}: every start stopped"
             else:
-                reason = (f"early stop at step {k}: converged (patience={cfg.patience}, "
-                          f"rtol={cfg.rtol:g}, gtol={cfg.gtol:g})")
+                reason = (
+                    f"early stop at step {k}: converged (patience={cfg.patience}, rtol={cfg.rtol:g}, gtol={cfg.gtol:g})"
+                )
             break
     return carry, rec, reason, False
 
@@ -438,9 +456,14 @@ def _history(rec: _Records) -> History:
     f_masked = np.where(np.isfinite(f_hist), f_hist, np.inf)
     rows, pick = np.arange(len(rec.f)), np.argmin(f_masked, axis=1)
     return History(
-        best_loss=np.asarray(rec.best, float), sims=np.asarray(rec.sims), wall_s=np.asarray(rec.wall),
-        loss=f_masked[rows, pick], grad_norm=g_hist[rows, pick], loss_per_start=f_hist,
-        grad_norm_per_start=g_hist, violation_per_start=np.stack(rec.violation),
+        best_loss=np.asarray(rec.best, float),
+        sims=np.asarray(rec.sims),
+        wall_s=np.asarray(rec.wall),
+        loss=f_masked[rows, pick],
+        grad_norm=g_hist[rows, pick],
+        loss_per_start=f_hist,
+        grad_norm_per_start=g_hist,
+        violation_per_start=np.stack(rec.violation),
     )
 
 
@@ -451,21 +474,25 @@ def _non_finite_note(carry: TunerState, history: History, idx: int, best_loss: f
         return ""
     bad = ~np.isfinite(history.loss_per_start) | ~np.isfinite(history.grad_norm_per_start)
     first_bad = [int(np.argmax(bad[:, i])) for i in dead]
-    return (f"; the loss or its gradient was non-finite (NaN/inf) in start(s) {dead.tolist()} at "
-            f"step(s) {first_bad}; kept the best finite point (start {idx}, step "
-            f"{int(np.asarray(carry.best_step)[idx])}, loss {best_loss:.6g})")
+    return (
+        f"; the loss or its gradient was non-finite (NaN/inf) in start(s) {dead.tolist()} at "
+        f"step(s) {first_bad}; kept the best finite point (start {idx}, step "
+        f"{int(np.asarray(carry.best_step)[idx])}, loss {best_loss:.6g})"
+    )
 
 
-def _convergence(carry: TunerState, history: History, idx: int, cfg: _Settings, reason: str,
-                 by_callback: bool, steps: int) -> tuple[bool, str]:
+def _convergence(
+    carry: TunerState, history: History, idx: int, cfg: _Settings, reason: str, by_callback: bool, steps: int
+) -> tuple[bool, str]:
     """Whether start ``idx`` (the one kept) met the convergence test, and the message saying so."""
     last_g = float(history.grad_norm_per_start[-1, idx])
     alive, active = bool(np.asarray(carry.alive)[idx]), bool(np.asarray(carry.active)[idx])
     converged = alive and not active and not by_callback
     test = f"gtol={cfg.gtol:g}" + (f", patience={cfg.patience} at rtol={cfg.rtol:g}" if cfg.patience else "")
     if converged:
-        why = ("gradient norm ≤ gtol" if last_g <= cfg.gtol
-               else f"no relative improvement > rtol for {cfg.patience} steps")
+        why = (
+            "gradient norm ≤ gtol" if last_g <= cfg.gtol else f"no relative improvement > rtol for {cfg.patience} steps"
+        )
         head = reason or f"converged within {steps} steps"
         return True, f"{head}; start {idx} converged: {why} (last gradient norm {last_g:.3g})"
     if not reason:
@@ -533,11 +560,24 @@ def tune(
     if callback is not None and not callable(callback):
         raise ValueError("callback: must be callable or None")
     steps = check_int("steps", steps)
-    tuner = gradient_tuner(loss, optimizer, params0=params0, reparam=reparam, constraints=constraints,
-                           constraint_method=constraint_method, penalty_weight=penalty_weight,
-                           multiplier_every=multiplier_every, constraint_tol=constraint_tol, n_starts=n_starts,
-                           init_spread=init_spread, patience=patience, rtol=rtol, gtol=gtol,
-                           sims_per_eval=sims_per_eval, mode=mode)
+    tuner = gradient_tuner(
+        loss,
+        optimizer,
+        params0=params0,
+        reparam=reparam,
+        constraints=constraints,
+        constraint_method=constraint_method,
+        penalty_weight=penalty_weight,
+        multiplier_every=multiplier_every,
+        constraint_tol=constraint_tol,
+        n_starts=n_starts,
+        init_spread=init_spread,
+        patience=patience,
+        rtol=rtol,
+        gtol=gtol,
+        sims_per_eval=sims_per_eval,
+        mode=mode,
+    )
     cfg = tuner.settings
     t0 = time.perf_counter()
     carry = tuner.init(None, key)
@@ -553,8 +593,11 @@ def tune(
     wall = rec.wall[-1]
     idx, best_loss = _best_index_and_loss(carry, cfg.tol, cfg.al)
     # a start whose loss or gradient is not finite stops there: its first point was all it evaluated
-    check_some_loss_finite(best_loss, f"the first point of each of the {tuner.n_starts} start(s)",
-                           f"check params0 and the loss (first values {np.asarray(rec.f[0])})")
+    check_some_loss_finite(
+        best_loss,
+        f"the first point of each of the {tuner.n_starts} start(s)",
+        f"check params0 and the loss (first values {np.asarray(rec.f[0])})",
+    )
     history = _history(rec)
     converged, message = _convergence(carry, history, idx, cfg, reason, by_callback, len(rec.f))
     best_u = jax.tree_util.tree_map(lambda a: a[idx], carry.best_u)
@@ -569,8 +612,9 @@ def tune(
         message=message + _non_finite_note(carry, history, idx, best_loss),
         start_index=int(idx),
         u=best_u,
-        constraint_violation=float(np.asarray(carry.best_v)[idx]) if cfg.al or constraints is not None
-        or (isinstance(loss, Problem) and loss.constraints is not None) else 0.0,
+        constraint_violation=float(np.asarray(carry.best_v)[idx])
+        if cfg.al or constraints is not None or (isinstance(loss, Problem) and loss.constraints is not None)
+        else 0.0,
         multipliers=np.asarray(carry.lam[idx]) if cfg.al else None,
         n_steps=len(rec.f),
         mode="forward" if cfg.use_forward else "reverse",

@@ -20,8 +20,17 @@ import pytest
 
 from tests.conftest import ROOT
 
-ABOVE_CORE = ("jaxsim.plants", "jaxsim.control", "jaxsim.estimation", "jaxsim.problem", "jaxsim.montecarlo",
-              "jaxsim.envs", "jaxsim.mjx", "optim", "experiments")
+ABOVE_CORE = (
+    "jaxsim.plants",
+    "jaxsim.control",
+    "jaxsim.estimation",
+    "jaxsim.problem",
+    "jaxsim.montecarlo",
+    "jaxsim.envs",
+    "jaxsim.mjx",
+    "optim",
+    "experiments",
+)
 
 # (modules under this package, imports they must not make)
 RULES: tuple[tuple[str, tuple[str, ...]], ...] = (

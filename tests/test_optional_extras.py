@@ -11,5 +11,7 @@ def test_extra_is_importable(module):
     try:
         importlib.import_module(module)
     except ImportError as err:  # pragma: no cover - the failure is the message
-        pytest.fail(f"{module} is missing: install the extras with `pip install -e '.[test,mjx,brax]'` "
-                    f"(what `make test` does): {err}")
+        pytest.fail(
+            f"{module} is missing: install the extras with `pip install -e '.[test,mjx,brax]'` "
+            f"(what `make test` does): {err}"
+        )

@@ -47,8 +47,12 @@ def test_readme_block(line, code, tmp_path):
             assert hits, f"README.md:{line}: {wanted!r} not found (in order) in {excerpt.group(1)}"
             pos = hits[0] + 1
         return
-    env = {**os.environ, "JAX_COMPILATION_CACHE_DIR": os.environ.get("JAXSIM_TEST_CACHE", str(ROOT / ".jax_cache")),
-           "PYTHONPATH": str(ROOT)}
-    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True,
-                          timeout=600, check=False)
+    env = {
+        **os.environ,
+        "JAX_COMPILATION_CACHE_DIR": os.environ.get("JAXSIM_TEST_CACHE", str(ROOT / ".jax_cache")),
+        "PYTHONPATH": str(ROOT),
+    }
+    proc = subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=600, check=False
+    )
     assert proc.returncode == 0, f"README.md:{line} failed:\n{proc.stderr[-3000:]}"

@@ -31,6 +31,7 @@ import jax
 import jax.numpy as jnp
 
 import jaxsim  # noqa: F401  (float64)
+from experiments.benchmarks.timing import write_json
 from jaxsim.control.pid import PIDParams, pid_init, pid_step
 from jaxsim.core.rollout import ClosedLoop, fold
 from jaxsim.core.signals import Step
@@ -38,7 +39,6 @@ from jaxsim.core.system import Controller
 from jaxsim.plants.second_order import StaticParams, static_plant
 from optim.problems import PIDTuning
 from optim.tune import FORWARD_MODE_MAX_PARAMS
-from experiments.benchmarks.timing import write_json
 
 
 def scheduled_loss(problem: PIDTuning, n_seg: int):
@@ -102,11 +102,15 @@ def main(argv=None) -> dict:
     args = ap.parse_args(argv)
     problem = PIDTuning(t_final=args.t_final)
     rows = []
-    print(f"closed-loop PID loss, {problem.n_ticks} ticks × {problem.substeps} RK4 substeps; "
-          f"median of {args.repeats}; devices {jax.devices()}")
+    print(
+        f"closed-loop PID loss, {problem.n_ticks} ticks × {problem.substeps} RK4 substeps; "
+        f"median of {args.repeats}; devices {jax.devices()}"
+    )
     print(f"{'':>6} {'median':>38} | {'minimum':>28}")
-    print(f"{'params':>6} {'loss ms':>8} {'reverse ms':>10} {'forward ms':>10} {'rev/fwd':>8} "
-          f"{'reverse ms':>10} {'forward ms':>10} {'rev/fwd':>8}")
+    print(
+        f"{'params':>6} {'loss ms':>8} {'reverse ms':>10} {'forward ms':>10} {'rev/fwd':>8} "
+        f"{'reverse ms':>10} {'forward ms':>10} {'rev/fwd':>8}"
+    )
     for n_seg in args.segments:
         loss = scheduled_loss(problem, n_seg)
         x = jnp.tile(jnp.array([[6.0], [6.0], [0.3]]), (1, n_seg)).ravel()
@@ -122,10 +126,12 @@ def main(argv=None) -> dict:
         row["reverse_over_forward"] = row["reverse_s"] / row["forward_s"]
         row["reverse_over_forward_min"] = row["reverse_min_s"] / row["forward_min_s"]
         rows.append(row)
-        print(f"{row['params']:>6} {1e3 * row['loss_s']:>8.3f} {1e3 * row['reverse_s']:>10.3f} "
-              f"{1e3 * row['forward_s']:>10.3f} {row['reverse_over_forward']:>8.2f} "
-              f"{1e3 * row['reverse_min_s']:>10.3f} {1e3 * row['forward_min_s']:>10.3f} "
-              f"{row['reverse_over_forward_min']:>8.2f}")
+        print(
+            f"{row['params']:>6} {1e3 * row['loss_s']:>8.3f} {1e3 * row['reverse_s']:>10.3f} "
+            f"{1e3 * row['forward_s']:>10.3f} {row['reverse_over_forward']:>8.2f} "
+            f"{1e3 * row['reverse_min_s']:>10.3f} {1e3 * row['forward_min_s']:>10.3f} "
+            f"{row['reverse_over_forward_min']:>8.2f}"
+        )
 
     def crossover(key: str) -> int:
         """Smallest tested p from which reverse mode stays faster (forward wins everywhere below)."""
@@ -135,10 +141,16 @@ def main(argv=None) -> dict:
         return rows[-1]["params"] * 2
 
     cross_med, cross_min = crossover(""), crossover("_min")
-    print(f"reverse mode stays faster from {cross_med} parameters on (medians), from {cross_min} (minima); "
-          f"optim.tune.FORWARD_MODE_MAX_PARAMS = {FORWARD_MODE_MAX_PARAMS}")
-    out = {"rows": rows, "reverse_faster_from_params_median": cross_med,
-           "reverse_faster_from_params_min": cross_min, "n_ticks": problem.n_ticks}
+    print(
+        f"reverse mode stays faster from {cross_med} parameters on (medians), from {cross_min} (minima); "
+        f"optim.tune.FORWARD_MODE_MAX_PARAMS = {FORWARD_MODE_MAX_PARAMS}"
+    )
+    out = {
+        "rows": rows,
+        "reverse_faster_from_params_median": cross_med,
+        "reverse_faster_from_params_min": cross_min,
+        "n_ticks": problem.n_ticks,
+    }
     write_json(args.json, out)
     return out
 

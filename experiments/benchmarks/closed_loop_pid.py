@@ -3,7 +3,8 @@
 Ours: one jitted ``vmap`` of the closed-loop rollout (RK4, plant step = controller period = dt)
 folding the ITAE of each gain set as it runs (``jaxsim.core.fold``: nothing stored per tick).  The
 batch is sharded over every visible JAX device; on a CPU, run with
-``XLA_FLAGS=--xla_force_host_platform_device_count=2`` to use both cores.  Peers, on the same horizon and time grid, timed on a subset
+``XLA_FLAGS=--xla_force_host_platform_device_count=2`` to use both cores.  Peers, on the same horizon and time grid,
+timed on a subset
 and extrapolated linearly to the full batch:
 
 * python-control: ``control.forced_response`` of the continuous closed loop ``C(s)P(s)/(1+C(s)P(s))``
@@ -11,7 +12,8 @@ and extrapolated linearly to the full batch:
 * SciPy: ``solve_ivp`` (RK45, rtol 1e-8, atol 1e-10) of the closed-loop ODE, one call per set.
 
 All three use P and I on the error and the filtered derivative on the measurement (no derivative
-kick), so they solve the same problem.  The peers simulate the continuous-time PID, ours the sampled-data PID at ``dt``; the ITAE difference
+kick), so they solve the same problem.  The peers simulate the continuous-time PID, ours the sampled-data PID at
+``dt``; the ITAE difference
 between the two is printed so the accuracy is visible next to the speed.
 
 Usage: ``python -m experiments.benchmarks.closed_loop_pid [--n 10000] [--subset 20] [--float32]``
@@ -30,11 +32,11 @@ import numpy as np
 import scipy.integrate
 
 import jaxsim  # noqa: F401  (float64)
+from experiments.benchmarks.timing import median_time, write_json
 from jaxsim.control.pid import PIDParams, pid, pid_transfer_function
 from jaxsim.core.rollout import ClosedLoop, Timing, fold
 from jaxsim.core.signals import Step
 from jaxsim.plants.second_order import static_plant
-from experiments.benchmarks.timing import median_time, write_json
 
 K, T1, T2, TF = 2.0, 0.1, 0.5, 0.02
 
@@ -45,9 +47,11 @@ def ours_fn(t_final: float, dt: float, dtype):
     timing = Timing(t_final=t_final, dt=dt)
 
     def itae(g):
-        p = PIDParams(kp=g[0], ki=g[1], kd=g[2], tf=jnp.asarray(TF, dtype), anti_windup="none",
-                      derivative_on="measurement")
+        p = PIDParams(
+            kp=g[0], ki=g[1], kd=g[2], tf=jnp.asarray(TF, dtype), anti_windup="none", derivative_on="measurement"
+        )
         loop = ClosedLoop(plant, dataclasses.replace(template, params=p), reference=Step(jnp.asarray(1.0, dtype)))
+
         def add(acc, tick):
             return acc + tick.t * jnp.abs(tick.r[0] - tick.y[0]) * timing.ts
 
@@ -84,10 +88,8 @@ def scipy_itae(g, t):
         acc = (K * u - y - (T1 + T2) * v) / (T1 * T2)
         return [v, acc, e, deriv]
 
-    sol = scipy.integrate.solve_ivp(rhs, (t[0], t[-1]), [0.0, 0.0, 0.0, 0.0], t_eval=t,
-                                    rtol=1e-8, atol=1e-10)
+    sol = scipy.integrate.solve_ivp(rhs, (t[0], t[-1]), [0.0, 0.0, 0.0, 0.0], t_eval=t, rtol=1e-8, atol=1e-10)
     return float(np.sum(t * np.abs(1.0 - sol.y[0])) * (t[1] - t[0]))
-
 
 
 def main(argv=None) -> dict:
@@ -134,16 +136,20 @@ def main(argv=None) -> dict:
     out["control_vs_scipy_rel_diff_max"] = float(np.max(np.abs(np.array(ctrl_vals[:n_sp]) - sp_vals) / np.abs(sp_vals)))
 
     print(f"closed-loop PID, {args.n} gain sets, {len(t)} steps of {args.dt} s, devices {out['devices']}")
-    print(f"  ours (jit+vmap, float64): {out['ours_s']:.3f} s median of {args.repeats} "
-          f"(first call incl. compile {out['ours_first_call_s']:.2f} s)")
+    print(
+        f"  ours (jit+vmap, float64): {out['ours_s']:.3f} s median of {args.repeats} "
+        f"(first call incl. compile {out['ours_first_call_s']:.2f} s)"
+    )
     if args.float32:
         print(f"  ours (float32):           {out['ours_float32_s']:.3f} s")
     print(f"  python-control loop:      {out['control_s_extrapolated']:.1f} s (extrapolated from {args.subset})")
     print(f"  scipy solve_ivp loop:     {out['scipy_s_extrapolated']:.1f} s (extrapolated from {n_sp})")
     print(f"  speed-up vs python-control: {out['ratio_vs_control']:.0f}x; vs solve_ivp: {out['ratio_vs_scipy']:.0f}x")
-    print(f"  ITAE max rel. difference: ours vs control {out['itae_rel_diff_vs_control_max']:.2e}, "
-          f"ours vs scipy {out['itae_rel_diff_vs_scipy_max']:.2e}, control vs scipy "
-          f"{out['control_vs_scipy_rel_diff_max']:.2e}")
+    print(
+        f"  ITAE max rel. difference: ours vs control {out['itae_rel_diff_vs_control_max']:.2e}, "
+        f"ours vs scipy {out['itae_rel_diff_vs_scipy_max']:.2e}, control vs scipy "
+        f"{out['control_vs_scipy_rel_diff_max']:.2e}"
+    )
     write_json(args.json, out)
     return out
 

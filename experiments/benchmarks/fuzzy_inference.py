@@ -32,8 +32,8 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxsim  # noqa: F401  (float64)
-from jaxsim.control import fuzzy as fz
 from experiments.benchmarks.timing import median_time, write_json
+from jaxsim.control import fuzzy as fz
 
 T = 7
 N_INPUT = 121  # input universe (the triangle corners lie on it, so scikit-fuzzy's interpolation is exact)
@@ -51,8 +51,7 @@ def system_definition():
 def ours_fn(dtype=jnp.float64, batch_size: int | None = None):
     """Jitted batch evaluation: one ``vmap`` over the whole batch, or over chunks (``evaluate_batch``)."""
     tri, table, _, grid = system_definition()
-    fis = fz.mamdani([("triangular", tri), ("triangular", tri)], grid, ("triangular", tri),
-                     fz.grid_rule_base(table))
+    fis = fz.mamdani([("triangular", tri), ("triangular", tri)], grid, ("triangular", tri), fz.grid_rule_base(table))
     fis = jax.tree_util.tree_map(lambda leaf: jnp.asarray(leaf, dtype), fis)
     if batch_size is None:
         return jax.jit(jax.vmap(lambda x: fz.evaluate(fis, x)))
@@ -71,8 +70,11 @@ def skfuzzy_sim():
     out = ctrl.Consequent(grid, "u")
     for t in range(T):
         out[f"t{t}"] = fuzz.trimf(grid, tri[t])
-    rules = [ctrl.Rule(ants[0][f"t{i}"] & ants[1][f"t{j}"], out[f"t{table[i, j]}"], label=f"r{i}{j}")
-             for i in range(T) for j in range(T)]
+    rules = [
+        ctrl.Rule(ants[0][f"t{i}"] & ants[1][f"t{j}"], out[f"t{table[i, j]}"], label=f"r{i}{j}")
+        for i in range(T)
+        for j in range(T)
+    ]
     return ctrl.ControlSystemSimulation(ctrl.ControlSystem(rules))
 
 
@@ -87,10 +89,10 @@ def simpful_system(subdivisions: int):
             fs.add_linguistic_variable(name, simpful.LinguisticVariable(sets, universe_of_discourse=[-1, 1]))
         sets = [simpful.FuzzySet(function=simpful.Triangular_MF(*tri[t]), term=f"t{t}") for t in range(T)]
         fs.add_linguistic_variable("u", simpful.LinguisticVariable(sets, universe_of_discourse=[-1.5, 1.5]))
-        fs.add_rules([f"IF (e IS t{i}) AND (de IS t{j}) THEN (u IS t{table[i, j]})"
-                      for i in range(T) for j in range(T)])
+        fs.add_rules(
+            [f"IF (e IS t{i}) AND (de IS t{j}) THEN (u IS t{table[i, j]})" for i in range(T) for j in range(T)]
+        )
     return fs
-
 
 
 def main(argv=None) -> dict:
@@ -117,8 +119,7 @@ def main(argv=None) -> dict:
     out["ours_evals_per_s"] = args.n / median_time(lambda: fn(xs).block_until_ready(), args.repeats)
     whole = ours_fn()
     np.testing.assert_allclose(np.asarray(whole(xs)), ours, rtol=0, atol=1e-12)
-    out["ours_whole_batch_vmap_evals_per_s"] = args.n / median_time(lambda: whole(xs).block_until_ready(),
-                                                                      args.repeats)
+    out["ours_whole_batch_vmap_evals_per_s"] = args.n / median_time(lambda: whole(xs).block_until_ready(), args.repeats)
     if args.float32:
         fn32 = ours_fn(jnp.float32, batch_size=args.batch_size)
         x32 = jnp.asarray(x, jnp.float32)
@@ -162,20 +163,28 @@ def main(argv=None) -> dict:
     out["max_abs_diff_vs_simpful"] = float(np.max(np.abs(ours[:n_sp] - sp)))
 
     print(f"Mamdani, 2 inputs × 7 terms, 49 rules, centroid on {N_OUTPUT} points; devices {out['devices']}")
-    print(f"  ours (evaluate_batch: jit+vmap over chunks of {args.batch_size}, float64, {args.n} inputs): "
-          f"{out['ours_evals_per_s']:,.0f} evals/s (median of {args.repeats}; first call incl. compile "
-          f"{out['ours_first_call_s']:.2f} s)")
+    print(
+        f"  ours (evaluate_batch: jit+vmap over chunks of {args.batch_size}, float64, {args.n} inputs): "
+        f"{out['ours_evals_per_s']:,.0f} evals/s (median of {args.repeats}; first call incl. compile "
+        f"{out['ours_first_call_s']:.2f} s)"
+    )
     print(f"  ours (one vmap over all {args.n}):  {out['ours_whole_batch_vmap_evals_per_s']:,.0f} evals/s")
     if args.float32:
         print(f"  ours (float32):                 {out['ours_float32_evals_per_s']:,.0f} evals/s")
     print(f"  scikit-fuzzy, one compute per input: {out['skfuzzy_evals_per_s']:,.1f} evals/s ({args.subset} inputs)")
     print(f"  scikit-fuzzy, array inputs:          {out['skfuzzy_array_evals_per_s']:,.1f} evals/s")
-    print(f"  simpful (subdivisions {args.subdivisions}):     {out['simpful_evals_per_s']:,.1f} evals/s ({n_sp} inputs)")
-    print(f"  speed-up: {out['ratio_vs_skfuzzy']:,.0f}x vs scikit-fuzzy, {out['ratio_vs_skfuzzy_array']:,.0f}x vs "
-          f"its array mode, {out['ratio_vs_simpful']:,.0f}x vs simpful")
-    print(f"  max |ours − scikit-fuzzy| = {out['max_abs_diff_vs_skfuzzy']:.1e} (array mode "
-          f"{out['max_abs_diff_vs_skfuzzy_array']:.1e}); |ours − simpful| = {out['max_abs_diff_vs_simpful']:.1e} "
-          "(simpful integrates on its own grid)")
+    print(
+        f"  simpful (subdivisions {args.subdivisions}):     {out['simpful_evals_per_s']:,.1f} evals/s ({n_sp} inputs)"
+    )
+    print(
+        f"  speed-up: {out['ratio_vs_skfuzzy']:,.0f}x vs scikit-fuzzy, {out['ratio_vs_skfuzzy_array']:,.0f}x vs "
+        f"its array mode, {out['ratio_vs_simpful']:,.0f}x vs simpful"
+    )
+    print(
+        f"  max |ours − scikit-fuzzy| = {out['max_abs_diff_vs_skfuzzy']:.1e} (array mode "
+        f"{out['max_abs_diff_vs_skfuzzy_array']:.1e}); |ours − simpful| = {out['max_abs_diff_vs_simpful']:.1e} "
+        "(simpful integrates on its own grid)"
+    )
     write_json(args.json, out)
     return out
 

@@ -42,10 +42,10 @@ import numpy as np
 
 import jaxsim  # noqa: F401  (float64)
 from experiments.benchmarks.closed_loop_pid import shard_batch
+from experiments.benchmarks.timing import median_time, write_json
 from jaxsim.core.pytree import replace
 from jaxsim.estimation.lgssm import LinearGaussianSSM, kalman_filter, lgssm, sample
 from jaxsim.estimation.shared_gain import covariance_sequence, mean_filter
-from experiments.benchmarks.timing import median_time, write_json
 
 N_STATES, N_MEAS = 4, 2
 
@@ -62,17 +62,27 @@ def cv_model(dtype=jnp.float64) -> LinearGaussianSSM:
 
 def generic_step_flops(n: int = N_STATES, p: int = N_MEAS) -> int:
     """Analytic flops of one Joseph-form update + predict (multiply-add = 2 flops)."""
-    update = (2 * p * n + p          # r = y − H m
-              + 2 * n * n * p        # P Hᵀ
-              + 2 * p * n * p + p * p  # S = H (P Hᵀ) + R
-              + p**3 // 3            # Cholesky of S
-              + 2 * 2 * p * p * n    # K by two triangular solves with n right-hand sides
-              + 2 * n * p + n        # m + K r
-              + 2 * n * p * n + n    # I − K H
-              + 2 * 2 * n**3         # (I − K H) P (I − K H)ᵀ
-              + 2 * n * p * p + 2 * n * p * n + n * n  # + K R Kᵀ
-              + 2 * n * n            # symmetrise
-              + p * p + 2 * p + 10)  # whitened residual, NIS, log-likelihood
+    update = (
+        2 * p * n
+        + p  # r = y − H m
+        + 2 * n * n * p  # P Hᵀ
+        + 2 * p * n * p
+        + p * p  # S = H (P Hᵀ) + R
+        + p**3 // 3  # Cholesky of S
+        + 2 * 2 * p * p * n  # K by two triangular solves with n right-hand sides
+        + 2 * n * p
+        + n  # m + K r
+        + 2 * n * p * n
+        + n  # I − K H
+        + 2 * 2 * n**3  # (I − K H) P (I − K H)ᵀ
+        + 2 * n * p * p
+        + 2 * n * p * n
+        + n * n  # + K R Kᵀ
+        + 2 * n * n  # symmetrise
+        + p * p
+        + 2 * p
+        + 10
+    )  # whitened residual, NIS, log-likelihood
     predict = 2 * n * n + 2 * 2 * n**3 + n * n + 2 * n * n  # F m, F P Fᵀ, + Q, symmetrise
     return update + predict
 
@@ -80,7 +90,6 @@ def generic_step_flops(n: int = N_STATES, p: int = N_MEAS) -> int:
 def shared_step_flops(n: int = N_STATES, p: int = N_MEAS) -> int:
     """Flops of one mean-only step: r, m + K r, whitened r and its square, F m."""
     return (2 * p * n + p) + (2 * n * p + n) + (2 * p * p + 2 * p + 2) + 2 * n * n
-
 
 
 def data_chunk(index: int, chunk: int, steps: int, dtype) -> jax.Array:
@@ -122,7 +131,7 @@ def time_sweep(fn, runs, chunk, steps, dtype, repeats, scales=None) -> tuple[flo
     total, first_ll, first_call = 0.0, None, 0.0
     for i in range(-(-runs // chunk)):
         y = data_chunk(i, chunk, steps, dtype)
-        args = (y,) if scales is None else (y, jnp.asarray(scales[i * chunk:(i + 1) * chunk], dtype))
+        args = (y,) if scales is None else (y, jnp.asarray(scales[i * chunk : (i + 1) * chunk], dtype))
         if i == 0:
             start = time.perf_counter()
             first_ll = np.asarray(fn(*args).block_until_ready())
@@ -226,8 +235,14 @@ def main(argv=None) -> dict:
     n_sub = max(args.numpy_runs, args.filterpy_runs)
     if n_sub > chunk:
         ap.error(f"the peers' subsets ({n_sub} runs) must fit in one chunk ({chunk})")
-    out: dict = {"runs": runs, "steps": steps, "chunk": chunk, "devices": str(jax.devices()),
-                 "flops_per_step_generic": generic_step_flops(), "flops_per_step_shared": shared_step_flops()}
+    out: dict = {
+        "runs": runs,
+        "steps": steps,
+        "chunk": chunk,
+        "devices": str(jax.devices()),
+        "flops_per_step_generic": generic_step_flops(),
+        "flops_per_step_shared": shared_step_flops(),
+    }
     model64, model32 = cv_model(jnp.float64), cv_model(jnp.float32)
     scales = run_scales(runs)
     sub_y = np.asarray(data_chunk(0, chunk, steps, jnp.float64))[:n_sub]  # the first runs of chunk 0
@@ -235,8 +250,7 @@ def main(argv=None) -> dict:
     lls: dict[str, dict[str, np.ndarray]] = {"shared_model": {}, "per_run_model": {}}
 
     def ours(scenario, name, fn, dtype, with_scales=False):  # all runs, chunk by chunk
-        t, ll, first = time_sweep(fn, runs, chunk, steps, dtype, args.repeats,
-                                  scales if with_scales else None)
+        t, ll, first = time_sweep(fn, runs, chunk, steps, dtype, args.repeats, scales if with_scales else None)
         seconds[scenario][name], lls[scenario][name] = t, ll
         out[f"{scenario}/{name}_first_call_s"] = first
 
@@ -258,7 +272,8 @@ def main(argv=None) -> dict:
     peer("shared_model", "numpy_shared_gain", lambda: numpy_shared(model64, y_np), args.numpy_runs)
     start = time.perf_counter()
     lls["shared_model"]["filterpy_loop"] = np.array(
-        [filterpy_loglik(model64, sub_y[i]) for i in range(args.filterpy_runs)])
+        [filterpy_loglik(model64, sub_y[i]) for i in range(args.filterpy_runs)]
+    )
     seconds["shared_model"]["filterpy_loop"] = (time.perf_counter() - start) * runs / args.filterpy_runs
 
     # --- scenario 2: every run has its own R (a sweep over a model parameter) -------------------
@@ -266,21 +281,30 @@ def main(argv=None) -> dict:
     ours("per_run_model", "ours_vmap_f32", ours_per_run(model32), jnp.float32, True)
     if "dynamax" not in out:
         ours("per_run_model", "dynamax_vmap_f64", dynamax_fn(model64, per_run=True), jnp.float64, True)
-    peer("per_run_model", "numpy_vectorised", lambda: numpy_filter(model64, y_np, scales[: args.numpy_runs]),
-         args.numpy_runs)
+    peer(
+        "per_run_model",
+        "numpy_vectorised",
+        lambda: numpy_filter(model64, y_np, scales[: args.numpy_runs]),
+        args.numpy_runs,
+    )
 
     peak64, peak32 = matmul_peak(jnp.float64), matmul_peak(jnp.float32)
     out.update(matmul_peak_gflops_f64=peak64, matmul_peak_gflops_f32=peak32, seconds=seconds)
     print(f"Kalman filter 4 states / 2 measurements, {steps} steps × {runs} runs; devices {out['devices']}")
-    print(f"(NumPy and FilterPy timed on subsets and extrapolated linearly; medians of {args.repeats}; "
-          f"matmul peak {peak64:.1f} GFLOP/s f64, {peak32:.1f} GFLOP/s f32 — 2048² jnp.dot)")
+    print(
+        f"(NumPy and FilterPy timed on subsets and extrapolated linearly; medians of {args.repeats}; "
+        f"matmul peak {peak64:.1f} GFLOP/s f64, {peak32:.1f} GFLOP/s f32 — 2048² jnp.dot)"
+    )
     for scenario, rows in seconds.items():
         ref_ll = lls[scenario]["ours_vmap_f64"]
         base = rows["ours_vmap_f64"]
         print(f"\n[{scenario}]  {'wall s':>10}{'× ours f64':>12}{'GFLOP/s':>10}{'max rel. Δ loglik':>19}")
         for name, sec in rows.items():
-            if scenario == "shared_model" and not name.startswith("numpy_vectorised") \
-                    and not name.startswith("filterpy"):
+            if (
+                scenario == "shared_model"
+                and not name.startswith("numpy_vectorised")
+                and not name.startswith("filterpy")
+            ):
                 flops = shared_step_flops() * work + generic_step_flops() * steps  # covariances once
             else:
                 flops = generic_step_flops() * work

@@ -26,9 +26,9 @@ import numpy as np
 import scipy.linalg as sl
 
 import jaxsim  # noqa: F401  (float64)
+from experiments.benchmarks.timing import median_time, write_json
 from jaxsim.control.lqr import lqr
 from jaxsim.plants.trms import FEEDBACK_MANUFACTURER, hover_equilibrium, linearize_at
-from experiments.benchmarks.timing import median_time, write_json
 
 
 def design_model() -> tuple[np.ndarray, np.ndarray]:
@@ -64,7 +64,6 @@ def scipy_jacobian(a, b, w, rel_step=1e-4):
     return np.stack(cols, axis=-1)
 
 
-
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--n", type=int, default=10_000, help="number of (Q, R) sets")
@@ -96,12 +95,17 @@ def main(argv=None) -> dict:
     out["max_rel_diff_vs_fd"] = float(np.max(np.abs(jac[idx] - ref) / scale))
 
     print(f"LQR gain Jacobians dK/d(q, r): {args.n} weight sets, n={n}, m={m}, devices {out['devices']}")
-    print(f"  ours (jit+vmap+jacfwd, implicit):  {out['ours_s']:.3f} s median of {args.repeats} "
-          f"(first call incl. compile {out['ours_first_call_s']:.2f} s), failed sets: {out['ours_failed_sets']}")
-    print(f"  SciPy CARE + central differences:  {out['scipy_fd_s_extrapolated']:.1f} s "
-          f"(extrapolated from {args.subset} sets, 19 CARE solves each)")
-    print(f"  speed-up: {out['ratio']:.0f}x;  max relative difference of the Jacobians: "
-          f"{out['max_rel_diff_vs_fd']:.1e}")
+    print(
+        f"  ours (jit+vmap+jacfwd, implicit):  {out['ours_s']:.3f} s median of {args.repeats} "
+        f"(first call incl. compile {out['ours_first_call_s']:.2f} s), failed sets: {out['ours_failed_sets']}"
+    )
+    print(
+        f"  SciPy CARE + central differences:  {out['scipy_fd_s_extrapolated']:.1f} s "
+        f"(extrapolated from {args.subset} sets, 19 CARE solves each)"
+    )
+    print(
+        f"  speed-up: {out['ratio']:.0f}x;  max relative difference of the Jacobians: {out['max_rel_diff_vs_fd']:.1e}"
+    )
     write_json(args.json, out)
     return out
 

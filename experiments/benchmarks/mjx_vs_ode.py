@@ -29,11 +29,11 @@ import mujoco.rollout
 import numpy as np
 
 import jaxsim  # noqa: F401  (float64)
+from experiments.benchmarks.timing import median_time, write_json
 from jaxsim.core.integrators import EULER, RK4
 from jaxsim.core.rollout import hold_input
 from jaxsim.mjx.trms import TO_ODE, trms_mjcf, trms_mjx_plant
 from jaxsim.plants import trms
-from experiments.benchmarks.timing import median_time, write_json
 
 H = 1e-3  # s, env-step
 
@@ -57,7 +57,7 @@ def c_mujoco_states(model: mujoco.MjModel, x0: np.ndarray) -> np.ndarray:
     data = mujoco.MjData(model)
     states = np.zeros((x0.shape[0], mujoco.mj_stateSize(model, spec)))
     for i, x in enumerate(x0):
-        data.qpos[:], data.qvel[:] = x[: model.nq], x[model.nq: model.nq + model.nv]
+        data.qpos[:], data.qvel[:] = x[: model.nq], x[model.nq : model.nq + model.nv]
         mujoco.mj_getState(model, data, states[i], spec)
     return states
 
@@ -71,8 +71,9 @@ def c_mujoco_rollout(model: mujoco.MjModel, threads: int, batch: int, steps: int
     sensors = np.empty((batch, steps, model.nsensordata))
 
     def run(states: np.ndarray, torques: np.ndarray) -> np.ndarray:
-        return mujoco.rollout.rollout(model, datas if threads > 1 else datas[0], states, torques,
-                                      state=out, sensordata=sensors)[0]
+        return mujoco.rollout.rollout(
+            model, datas if threads > 1 else datas[0], states, torques, state=out, sensordata=sensors
+        )[0]
 
     return run
 
@@ -120,12 +121,16 @@ def main(argv=None) -> dict:
             _, med = _timed(lambda: run(states, torques), args.repeats)
             row[f"c_mujoco_{threads}t"] = b * args.steps / med
         rows.append(row)
-        print(f"batch {b:5d}: env-steps/s  " + "  ".join(
-            f"{k} {row[k]:.3g}" for k in ("ode_rk4", "ode_euler", "mjx", "c_mujoco_1t", "c_mujoco_2t")))
-        print(f"             ratios to ODE RK4: mjx {row['mjx'] / row['ode_rk4']:.3g}×, "
-              f"C MuJoCo 1 thread {row['c_mujoco_1t'] / row['ode_rk4']:.3g}×, "
-              f"2 threads {row['c_mujoco_2t'] / row['ode_rk4']:.3g}×;  "
-              f"compile s: ode {row['ode_rk4_compile_s']:.1f}, mjx {row['mjx_compile_s']:.1f}")
+        print(
+            f"batch {b:5d}: env-steps/s  "
+            + "  ".join(f"{k} {row[k]:.3g}" for k in ("ode_rk4", "ode_euler", "mjx", "c_mujoco_1t", "c_mujoco_2t"))
+        )
+        print(
+            f"             ratios to ODE RK4: mjx {row['mjx'] / row['ode_rk4']:.3g}×, "
+            f"C MuJoCo 1 thread {row['c_mujoco_1t'] / row['ode_rk4']:.3g}×, "
+            f"2 threads {row['c_mujoco_2t'] / row['ode_rk4']:.3g}×;  "
+            f"compile s: ode {row['ode_rk4_compile_s']:.1f}, mjx {row['mjx_compile_s']:.1f}"
+        )
     out = {"h": H, "rows": rows, "devices": str(jax.devices())}
     write_json(args.json, out)
     return out

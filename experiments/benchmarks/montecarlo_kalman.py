@@ -72,15 +72,15 @@ def kf_metric(key, p):
         x, xh, P = carry
         x = F @ x + G @ wv[0]
         z = x[:2] + wv[1]
-        xh = F @ xh                                   # predict
+        xh = F @ xh  # predict
         P = _mm(_mm(F, P), F.T) + Q
-        S = P[:2, :2] + r2 * jnp.eye(2)               # update, H = [I 0]
+        S = P[:2, :2] + r2 * jnp.eye(2)  # update, H = [I 0]
         det = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
         Si = jnp.array([[S[1, 1], -S[0, 1]], [-S[1, 0], S[0, 0]]]) / det
         K = _mm(P[:, :2], Si)
         e = z - xh[:2]
         xh = xh + K @ e
-        A = jnp.eye(4).at[:, :2].add(-K)               # Joseph form
+        A = jnp.eye(4).at[:, :2].add(-K)  # Joseph form
         P = _mm(_mm(A, P), A.T) + r2 * _mm(K, K.T)
         return (x, xh, P), e @ Si @ e
 
@@ -109,6 +109,7 @@ def _rss_mb() -> float:
 
 # -- workers (one process each) ------------------------------------------------------------------
 
+
 def worker_throughput(n: int, repeats: int, naive: bool) -> dict:
     import jax
     import jax.numpy as jnp
@@ -126,12 +127,18 @@ def worker_throughput(n: int, repeats: int, naive: bool) -> dict:
         res = mc.monte_carlo(kf_metric, space, n, 0, chunk_size=chunk)
         times.append(time.perf_counter() - start)
         cpu.append(time.process_time() - cpu0)
-    out.update(ours_s=statistics.median(times), ours_best_s=min(times), ours_all_s=times,
-               ours_cpu_s=statistics.median(cpu), cpu_per_wall=[c / w for c, w in zip(cpu, times)],
-               peak_rss_before_naive_mb=_rss_mb(),
-               position_error_mean=float(res["position_error"].mean),
-               position_error_p95=float(res["position_error"].quantile(0.95)),
-               nis_mean=float(res["nis_mean"].mean), p_lost=float(res["lost"].probability))
+    out.update(
+        ours_s=statistics.median(times),
+        ours_best_s=min(times),
+        ours_all_s=times,
+        ours_cpu_s=statistics.median(cpu),
+        cpu_per_wall=[c / w for c, w in zip(cpu, times)],
+        peak_rss_before_naive_mb=_rss_mb(),
+        position_error_mean=float(res["position_error"].mean),
+        position_error_p95=float(res["position_error"].quantile(0.95)),
+        nis_mean=float(res["nis_mean"].mean),
+        p_lost=float(res["lost"].probability),
+    )
     if naive:
         one = jax.jit(jax.vmap(lambda i: mc.run_one(kf_metric, space, {}, jax.random.key(0), i)[1]))
         idx = jnp.arange(n)
@@ -144,7 +151,9 @@ def worker_throughput(n: int, repeats: int, naive: bool) -> dict:
             _ = (e.mean(), e.var(ddof=1), np.asarray(vals["nis_mean"]).mean())
             t.append(time.perf_counter() - start)
         out["naive_s"] = statistics.median(t)
-        out["naive_vs_ours_position_error_mean_rel"] = abs(float(e.mean()) - out["position_error_mean"]) / out["position_error_mean"]
+        out["naive_vs_ours_position_error_mean_rel"] = (
+            abs(float(e.mean()) - out["position_error_mean"]) / out["position_error_mean"]
+        )
     out["peak_rss_mb"] = _rss_mb()
     return out
 
@@ -158,19 +167,28 @@ def worker_memory(n: int) -> dict:
     baseline = _rss_mb()
     start = time.perf_counter()
     res = mc.monte_carlo(walk_max, space, n, 0, chunk_size=100_000)
-    return {"n": n, "wall_s": time.perf_counter() - start, "rss_after_compile_mb": baseline,
-            "peak_rss_mb": _rss_mb(), "mean": float(res["value"].mean)}
+    return {
+        "n": n,
+        "wall_s": time.perf_counter() - start,
+        "rss_after_compile_mb": baseline,
+        "peak_rss_mb": _rss_mb(),
+        "mean": float(res["value"].mean),
+    }
 
 
 # -- driver --------------------------------------------------------------------------------------
+
 
 def _spawn(args: list[str], devices: int) -> dict:
     env = dict(os.environ)
     flags = " ".join(f for f in env.get("XLA_FLAGS", "").split() if "device_count" not in f)
     env["XLA_FLAGS"] = f"{flags} --xla_force_host_platform_device_count={devices}".strip()
     with tempfile.NamedTemporaryFile(suffix=".json") as fh:
-        subprocess.run([sys.executable, "-m", "experiments.benchmarks.montecarlo_kalman", "--worker",
-                        *args, "--json", fh.name], env=env, check=True)
+        subprocess.run(
+            [sys.executable, "-m", "experiments.benchmarks.montecarlo_kalman", "--worker", *args, "--json", fh.name],
+            env=env,
+            check=True,
+        )
         return json.loads(open(fh.name).read())
 
 
@@ -186,8 +204,11 @@ def main(argv=None) -> dict:
 
     if args.worker:
         kind, *rest = args.worker
-        out = worker_throughput(int(rest[0]), int(rest[1]), rest[2] == "1") if kind == "throughput" \
+        out = (
+            worker_throughput(int(rest[0]), int(rest[1]), rest[2] == "1")
+            if kind == "throughput"
             else worker_memory(int(float(rest[0])))
+        )
         with open(args.json, "w") as fh:
             json.dump(out, fh)
         return out
@@ -201,27 +222,40 @@ def main(argv=None) -> dict:
     one, two = runs["1 device"], runs["2 devices"]
     out["speedup_2_vs_1_median"] = one["ours_s"] / two["ours_s"]
     out["speedup_2_vs_1_best"] = one["ours_best_s"] / two["ours_best_s"]
-    print(f"Kalman-filter Monte Carlo: {args.n:,} runs × {STEPS} steps, 4 states / 2 measurements, float64, "
-          f"{os.cpu_count()} cores")
+    print(
+        f"Kalman-filter Monte Carlo: {args.n:,} runs × {STEPS} steps, 4 states / 2 measurements, float64, "
+        f"{os.cpu_count()} cores"
+    )
     for label, r in runs.items():
-        print(f"  {label:9s}: median {r['ours_s']:6.2f} s, best {r['ours_best_s']:6.2f} s of {args.repeats} "
-              f"({args.n / r['ours_s']:9,.0f} runs/s median); CPU {r['ours_cpu_s']:.2f} s; CPU/wall "
-              f"{', '.join(f'{x:.2f}' for x in r['cpu_per_wall'])}; compile {r['compile_s']:.1f} s; "
-              f"peak RSS {r['peak_rss_before_naive_mb']:.0f} MB")
-    print(f"  speed-up 2 vs 1 device: {out['speedup_2_vs_1_median']:.2f}x (medians), "
-          f"{out['speedup_2_vs_1_best']:.2f}x (best runs)")
+        print(
+            f"  {label:9s}: median {r['ours_s']:6.2f} s, best {r['ours_best_s']:6.2f} s of {args.repeats} "
+            f"({args.n / r['ours_s']:9,.0f} runs/s median); CPU {r['ours_cpu_s']:.2f} s; CPU/wall "
+            f"{', '.join(f'{x:.2f}' for x in r['cpu_per_wall'])}; compile {r['compile_s']:.1f} s; "
+            f"peak RSS {r['peak_rss_before_naive_mb']:.0f} MB"
+        )
+    print(
+        f"  speed-up 2 vs 1 device: {out['speedup_2_vs_1_median']:.2f}x (medians), "
+        f"{out['speedup_2_vs_1_best']:.2f}x (best runs)"
+    )
     if "naive_s" in one:
-        print(f"  naive jit(vmap) of all {args.n:,} runs at once + NumPy stats (1 device): {one['naive_s']:.2f} s, "
-              f"peak RSS {one['peak_rss_mb']:.0f} MB (ours/naive time ratio {one['ours_s'] / one['naive_s']:.2f}); "
-              f"mean position error agrees to {one['naive_vs_ours_position_error_mean_rel']:.1e}")
-    print(f"  position error mean {one['position_error_mean']:.4f}, p95 {one['position_error_p95']:.4f}; "
-          f"mean NIS {one['nis_mean']:.4f} (χ²₂ → 2); P(error > 3r) = {one['p_lost']:.2e}")
+        print(
+            f"  naive jit(vmap) of all {args.n:,} runs at once + NumPy stats (1 device): {one['naive_s']:.2f} s, "
+            f"peak RSS {one['peak_rss_mb']:.0f} MB (ours/naive time ratio {one['ours_s'] / one['naive_s']:.2f}); "
+            f"mean position error agrees to {one['naive_vs_ours_position_error_mean_rel']:.1e}"
+        )
+    print(
+        f"  position error mean {one['position_error_mean']:.4f}, p95 {one['position_error_p95']:.4f}; "
+        f"mean NIS {one['nis_mean']:.4f} (χ²₂ → 2); P(error > 3r) = {one['p_lost']:.2e}"
+    )
     if args.memory_n:
         out["memory"] = [_spawn(["memory", m], 1) for m in args.memory_n.split(",")]
         print("  peak RSS of a whole process vs n (scalar metric, 1 device):")
         for m in out["memory"]:
-            print(f"    n = {m['n']:>12,}: peak {m['peak_rss_mb']:.0f} MB (after compile {m['rss_after_compile_mb']:.0f} MB), "
-                  f"{m['wall_s']:.1f} s, {m['n'] / m['wall_s']:,.0f} runs/s")
+            print(
+                f"    n = {m['n']:>12,}: peak {m['peak_rss_mb']:.0f} MB "
+                f"(after compile {m['rss_after_compile_mb']:.0f} MB), "
+                f"{m['wall_s']:.1f} s, {m['n'] / m['wall_s']:,.0f} runs/s"
+            )
     write_json(args.json, out)
     return out
 

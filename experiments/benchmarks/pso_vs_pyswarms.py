@@ -35,9 +35,9 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxsim  # noqa: F401  (float64)
+from experiments.benchmarks.timing import write_json
 from optim.problems import PIDTuning
 from optim.pso import pso
-from experiments.benchmarks.timing import write_json
 
 N_PARTICLES, N_ITERS = 64, 100
 OPTIONS = {"c1": 1.5, "c2": 1.5, "w": 0.9}
@@ -47,8 +47,15 @@ def numpy_swarm_loss(problem: PIDTuning, gains: np.ndarray) -> np.ndarray:
     """The problem's loss for every row of ``gains`` ``(n, 3)``, stepped in NumPy over the swarm."""
     kp, ki, kd = gains[:, 0], gains[:, 1], gains[:, 2]
     n = gains.shape[0]
-    K, T1, T2, tf, ts, rho, r = (problem.K, problem.T1, problem.T2, problem.tf, problem.ts,
-                                 problem.rho, problem.reference)
+    K, T1, T2, tf, ts, rho, r = (
+        problem.K,
+        problem.T1,
+        problem.T2,
+        problem.tf,
+        problem.ts,
+        problem.rho,
+        problem.reference,
+    )
     h = ts / problem.substeps
     y, v = np.zeros(n), np.zeros(n)
     integ, deriv, prev = np.zeros(n), np.zeros(n), np.zeros(n)
@@ -78,8 +85,15 @@ def numpy_swarm_loss(problem: PIDTuning, gains: np.ndarray) -> np.ndarray:
 def python_particle_loss(problem: PIDTuning, g: np.ndarray) -> float:
     """The same loss for one gain vector in plain Python floats."""
     kp, ki, kd = (float(v) for v in g)
-    K, T1, T2, tf, ts, rho, r = (problem.K, problem.T1, problem.T2, problem.tf, problem.ts,
-                                 problem.rho, problem.reference)
+    K, T1, T2, tf, ts, rho, r = (
+        problem.K,
+        problem.T1,
+        problem.T2,
+        problem.tf,
+        problem.ts,
+        problem.rho,
+        problem.reference,
+    )
     h = ts / problem.substeps
     y = v = integ = deriv = prev = cost = 0.0
     for _ in range(problem.n_ticks):
@@ -106,9 +120,15 @@ def run_pyswarms(objective, lo, hi, iters: int, seed: int):
     import pyswarms as ps
 
     np.random.seed(seed)
-    opt = ps.single.GlobalBestPSO(N_PARTICLES, 3, options=dict(OPTIONS), bounds=(lo, hi),
-                                  oh_strategy={"w": "lin_variation"}, bh_strategy="reflective",
-                                  velocity_clamp=(-0.5 * (hi - lo), 0.5 * (hi - lo)))
+    opt = ps.single.GlobalBestPSO(
+        N_PARTICLES,
+        3,
+        options=dict(OPTIONS),
+        bounds=(lo, hi),
+        oh_strategy={"w": "lin_variation"},
+        bh_strategy="reflective",
+        velocity_clamp=(-0.5 * (hi - lo), 0.5 * (hi - lo)),
+    )
     t0 = time.perf_counter()
     cost, pos = opt.optimize(objective, iters, verbose=False)
     return time.perf_counter() - t0, float(cost), pos
@@ -123,8 +143,12 @@ def main(argv=None) -> dict:
     logging.getLogger("pyswarms").setLevel(logging.WARNING)
     problem = PIDTuning()
     lo, hi = problem.box
-    out: dict = {"n_particles": N_PARTICLES, "n_iters": N_ITERS, "n_ticks": problem.n_ticks,
-                 "devices": str(jax.devices())}
+    out: dict = {
+        "n_particles": N_PARTICLES,
+        "n_iters": N_ITERS,
+        "n_ticks": problem.n_ticks,
+        "devices": str(jax.devices()),
+    }
 
     check = np.random.default_rng(0).uniform(lo, hi, (8, 3))
     ref = np.asarray(jax.vmap(problem.loss)(jnp.asarray(check)))
@@ -138,8 +162,7 @@ def main(argv=None) -> dict:
     out["ours_compile_s"] = first.compile_s
     ours, numpy_runs, jax_runs = [], [], []
     for s in range(args.repeats):  # the three take turns, so load from other processes hits them alike
-        ours.append(pso(problem.loss, lo, hi, n_particles=N_PARTICLES, n_iters=N_ITERS,
-                        key=jax.random.PRNGKey(s + 1)))
+        ours.append(pso(problem.loss, lo, hi, n_particles=N_PARTICLES, n_iters=N_ITERS, key=jax.random.PRNGKey(s + 1)))
         numpy_runs.append(run_pyswarms(numpy_objective, lo, hi, N_ITERS, s))
         jax_runs.append(run_pyswarms(jax_objective, lo, hi, N_ITERS, s))
     out["ours_s"] = statistics.median(r.wall_s for r in ours)
@@ -157,19 +180,29 @@ def main(argv=None) -> dict:
         out["pyswarms_python_loop_s_extrapolated"] = statistics.median(times) / 2 * N_ITERS
         out["ratio_pyswarms_python_loop_over_ours"] = out["pyswarms_python_loop_s_extrapolated"] / out["ours_s"]
 
-    print(f"PSO, {N_PARTICLES} particles × {N_ITERS} iterations on the closed-loop PID loss "
-          f"({problem.n_ticks} ticks × {problem.substeps} RK4 substeps), median of {args.repeats}")
-    print(f"  ours (jit + vmap, float64):        {out['ours_s']:.3f} s  "
-          f"(+ compile {out['ours_compile_s']:.2f} s), "
-          f"best loss {out['ours_best_loss']:.6f}")
-    print(f"  pyswarms + NumPy swarm loss:       {out['pyswarms_numpy_s']:.3f} s  → ratio "
-          f"{out['ratio_pyswarms_numpy_over_ours']:.1f}×, best loss {out['pyswarms_numpy_best_loss']:.6f} "
-          f"(NumPy vs JAX loss rel. diff {out['numpy_loss_rel_diff']:.1e})")
-    print(f"  pyswarms + our jitted batched loss: {out['pyswarms_our_loss_s']:.3f} s  → ratio "
-          f"{out['ratio_pyswarms_our_loss_over_ours']:.2f}×")
+    print(
+        f"PSO, {N_PARTICLES} particles × {N_ITERS} iterations on the closed-loop PID loss "
+        f"({problem.n_ticks} ticks × {problem.substeps} RK4 substeps), median of {args.repeats}"
+    )
+    print(
+        f"  ours (jit + vmap, float64):        {out['ours_s']:.3f} s  "
+        f"(+ compile {out['ours_compile_s']:.2f} s), "
+        f"best loss {out['ours_best_loss']:.6f}"
+    )
+    print(
+        f"  pyswarms + NumPy swarm loss:       {out['pyswarms_numpy_s']:.3f} s  → ratio "
+        f"{out['ratio_pyswarms_numpy_over_ours']:.1f}×, best loss {out['pyswarms_numpy_best_loss']:.6f} "
+        f"(NumPy vs JAX loss rel. diff {out['numpy_loss_rel_diff']:.1e})"
+    )
+    print(
+        f"  pyswarms + our jitted batched loss: {out['pyswarms_our_loss_s']:.3f} s  → ratio "
+        f"{out['ratio_pyswarms_our_loss_over_ours']:.2f}×"
+    )
     if args.python_loop:
-        print(f"  pyswarms + per-particle Python loop: {out['pyswarms_python_loop_s_extrapolated']:.1f} s "
-              f"(extrapolated from 2 iterations) → ratio {out['ratio_pyswarms_python_loop_over_ours']:.0f}×")
+        print(
+            f"  pyswarms + per-particle Python loop: {out['pyswarms_python_loop_s_extrapolated']:.1f} s "
+            f"(extrapolated from 2 iterations) → ratio {out['ratio_pyswarms_python_loop_over_ours']:.0f}×"
+        )
     write_json(args.json, out)
     return out
 

@@ -73,8 +73,9 @@ def random_tf(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]
     return num, den
 
 
-def random_loop(rng: np.random.Generator, dt: float | None = None, integrator: bool = True,
-                order: int = 2) -> ct.TransferFunction:
+def random_loop(
+    rng: np.random.Generator, dt: float | None = None, integrator: bool = True, order: int = 2
+) -> ct.TransferFunction:
     """A loop transfer function ``k·P·C``: random stable plant of ``order`` states, PI (if
     ``integrator``) or lead controller.  Kept a transfer function: python-control's polynomial
     margins of an ``ss`` go through ``ss → tf``, whose rounding-level leading numerator coefficients
@@ -140,14 +141,21 @@ def check_construct(rng, n):
     w = np.logspace(-2, 2, 25)
     for i in range(n):
         sys = random_ss(rng, *size(i))
-        diffs["ss"].append(rel_diff(lt.frequency_response(to_ours(sys), w, squeeze=False).response,
-                                    ct.frequency_response(sys, w, squeeze=False).complex))
+        diffs["ss"].append(
+            rel_diff(
+                lt.frequency_response(to_ours(sys), w, squeeze=False).response,
+                ct.frequency_response(sys, w, squeeze=False).complex,
+            )
+        )
         num, den = random_tf(rng, size(i)[0])
         diffs["tf"].append(rel_diff(lt.evalfr(lt.tf(num, den), 1j * w)[:, 0, 0], ct.tf(num, den)(1j * w)))
         z, p, k = np.roots(num) if len(num) > 1 else [], np.roots(den), num[0] / den[0]
         diffs["zpk"].append(rel_diff(lt.evalfr(lt.zpk(z, p, k), 1j * w)[:, 0, 0], ct.zpk(z, p, k)(1j * w)))
-    return [("ss", "rss (n,p,m) in SIZES, D random", diffs["ss"]), ("tf", "random num/den, n in SIZES", diffs["tf"]),
-            ("zpk", "roots of random num/den", diffs["zpk"])]
+    return [
+        ("ss", "rss (n,p,m) in SIZES, D random", diffs["ss"]),
+        ("tf", "random num/den, n in SIZES", diffs["tf"]),
+        ("zpk", "roots of random num/den", diffs["zpk"]),
+    ]
 
 
 def check_interconnect(rng, n):
@@ -213,9 +221,11 @@ def check_placement(rng, n):
         ack.append(rel_diff(lt.acker(a, b[:, :1], poles), ct.acker(a, b[:, :1], poles)))
         k = np.asarray(lt.place(a, b, poles))
         mimo.append(rel_diff(sorted_roots(np.linalg.eigvals(a - b @ k)), sorted_roots(poles)))
-    return [("place (1 input), K", "random A, B (n = 3, 5), poles with a complex pair", siso),
-            ("place (2 inputs), eig(A−BK)", "same, vs the requested poles", mimo),
-            ("acker", "random A, b (n = 3, 5)", ack)]
+    return [
+        ("place (1 input), K", "random A, B (n = 3, 5), poles with a complex pair", siso),
+        ("place (2 inputs), eig(A−BK)", "same, vs the requested poles", mimo),
+        ("acker", "random A, b (n = 3, 5)", ack),
+    ]
 
 
 def check_design(rng, n):
@@ -245,20 +255,34 @@ def check_design(rng, n):
         compare("lqr", lambda: jc.lqr(a, b, q, r), lambda: ct.lqr(a, b, q, r))
         compare("lqr N", lambda: jc.lqr(a, b, q, r, nn), lambda: ct.lqr(a, b, q, r, nn))
         compare("dlqr", lambda: jc.dlqr(ad, b, q, r), lambda: ct.dlqr(ad, b, q, r))
-        compare("care S E", lambda: jc.care(a, b, q, r, nn, e),
-                lambda: ct.care(a, b, q, r, nn, e, method="scipy"), (0, 2))
-        compare("dare S E", lambda: jc.dare(ad, b, q, r, nn, e),
-                lambda: ct.dare(ad, b, q, r, nn, e, method="scipy"), (0, 2))
+        compare(
+            "care S E", lambda: jc.care(a, b, q, r, nn, e), lambda: ct.care(a, b, q, r, nn, e, method="scipy"), (0, 2)
+        )
+        compare(
+            "dare S E", lambda: jc.dare(ad, b, q, r, nn, e), lambda: ct.dare(ad, b, q, r, nn, e, method="scipy"), (0, 2)
+        )
         compare("lqe", lambda: jc.lqe(a, np.eye(nx), c, q, r), lambda: ct.lqe(a, np.eye(nx), c, q, r))
         compare("dlqe", lambda: jc.dlqe(ad, np.eye(nx), c, q, r), lambda: ct.dlqe(ad, np.eye(nx), c, q, r))
     desc = "random A, B (n, m from SIZES), diagonal weights; K/L and S/P/X"
-    return [(k, desc + (f"; {failed[k]} left out: python-control found no solution" if failed[k] else ""), v)
-            for k, v in out.items()]
+    return [
+        (k, desc + (f"; {failed[k]} left out: python-control found no solution" if failed[k] else ""), v)
+        for k, v in out.items()
+    ]
 
 
 def check_time(rng, n):
-    out = {k: [] for k in ("step_response", "impulse_response", "initial_response", "forced_response",
-                           "step_response (discrete)", "forced_response (discrete)", "step_info")}
+    out = {
+        k: []
+        for k in (
+            "step_response",
+            "impulse_response",
+            "initial_response",
+            "forced_response",
+            "step_response (discrete)",
+            "forced_response (discrete)",
+            "step_info",
+        )
+    }
     for i in range(n):
         nx, p, m = size(i)
         sys = random_ss(rng, nx, p, m)
@@ -270,14 +294,22 @@ def check_time(rng, n):
         out["step_response"].append(both(lt.step_response(ours, t), ct.step_response(sys, t)))
         out["impulse_response"].append(both(lt.impulse_response(ours, t), ct.impulse_response(sys, t)))
         out["initial_response"].append(both(lt.initial_response(ours, t, x0), ct.initial_response(sys, t, x0)))
-        out["forced_response"].append(both(lt.forced_response(ours, t, u if m > 1 else u[0], x0),
-                                           ct.forced_response(sys, t, u if m > 1 else u[0], x0)))
+        out["forced_response"].append(
+            both(
+                lt.forced_response(ours, t, u if m > 1 else u[0], x0),
+                ct.forced_response(sys, t, u if m > 1 else u[0], x0),
+            )
+        )
         dsys = random_ss(rng, nx, p, m, dt=0.1)
         td = np.arange(60) * 0.1
         ud = rng.normal(size=(m, td.size))
         out["step_response (discrete)"].append(both(lt.step_response(to_ours(dsys), td), ct.step_response(dsys, td)))
-        out["forced_response (discrete)"].append(both(lt.forced_response(to_ours(dsys), td, ud if m > 1 else ud[0]),
-                                                      ct.forced_response(dsys, td, ud if m > 1 else ud[0])))
+        out["forced_response (discrete)"].append(
+            both(
+                lt.forced_response(to_ours(dsys), td, ud if m > 1 else ud[0]),
+                ct.forced_response(dsys, td, ud if m > 1 else ud[0]),
+            )
+        )
         siso = ct.ss(sys.A, sys.B[:, :1], sys.C[:1], sys.D[:1, :1])
         resp = lt.step_response(to_ours(siso), np.linspace(0.0, 15.0, 1501))
         yf = float(ct.dcgain(siso))
@@ -287,13 +319,15 @@ def check_time(rng, n):
             continue
         mine = lt.step_info(resp, yfinal=yf).as_dict()
         out["step_info"].append(max(rel_diff(mine[k], ref[k]) for k in ref))
-    return [("step_response", "rss, SIZES, 161 points", out["step_response"]),
-            ("impulse_response", "same", out["impulse_response"]),
-            ("initial_response", "same, random X0", out["initial_response"]),
-            ("forced_response", "same, random U (linear between samples), X0", out["forced_response"]),
-            ("step_response (discrete)", "drss, SIZES, dt=0.1, 60 samples", out["step_response (discrete)"]),
-            ("forced_response (discrete)", "same, random U", out["forced_response (discrete)"]),
-            ("step_info", "SISO rss step responses (1501 points), all nine entries, same samples", out["step_info"])]
+    return [
+        ("step_response", "rss, SIZES, 161 points", out["step_response"]),
+        ("impulse_response", "same", out["impulse_response"]),
+        ("initial_response", "same, random X0", out["initial_response"]),
+        ("forced_response", "same, random U (linear between samples), X0", out["forced_response"]),
+        ("step_response (discrete)", "drss, SIZES, dt=0.1, 60 samples", out["step_response (discrete)"]),
+        ("forced_response (discrete)", "same, random U", out["forced_response (discrete)"]),
+        ("step_info", "SISO rss step responses (1501 points), all nine entries, same samples", out["step_info"]),
+    ]
 
 
 def check_frequency(rng, n):
@@ -309,8 +343,10 @@ def check_frequency(rng, n):
             mag, phase, _ = ct.bode(siso, w, plot=False)
         ob = lt.bode(to_ours(siso), w)
         bd.append(max(rel_diff(ob.magnitude, mag), rel_diff(ob.phase, phase)))
-    return [("frequency_response", "rss, SIZES, 50 frequencies: mag and phase", fr),
-            ("bode", "SISO rss, unwrapped phase", bd)]
+    return [
+        ("frequency_response", "rss, SIZES, 50 frequencies: mag and phase", fr),
+        ("bode", "SISO rss, unwrapped phase", bd),
+    ]
 
 
 def _reference_margins(loop: ct.StateSpace):
@@ -332,13 +368,24 @@ def _spurious_sm(loop: ct.StateSpace, ref) -> bool:
 
 
 def check_margins(rng, n):
-    rows = {k: [] for k in ("gm pm wpc wgc", "sm wms", "margin", "delay margin", "discrete gm pm wpc wgc",
-                            "discrete sm", "discrete wms")}
+    rows = {
+        k: []
+        for k in (
+            "gm pm wpc wgc",
+            "sm wms",
+            "margin",
+            "delay margin",
+            "discrete gm pm wpc wgc",
+            "discrete sm",
+            "discrete wms",
+        )
+    }
     skipped, spurious = 0, 0
     for i in range(2 * n):
         discrete = i >= n
-        loop = random_loop(rng, dt=float(rng.uniform(0.1, 0.3)) if discrete else None, integrator=not discrete,
-                           order=2 + i % 2)
+        loop = random_loop(
+            rng, dt=float(rng.uniform(0.1, 0.3)) if discrete else None, integrator=not discrete, order=2 + i % 2
+        )
         try:
             ref, dm_ref = _reference_margins(loop)
         except (UserWarning, RuntimeWarning):
@@ -361,15 +408,24 @@ def check_margins(rng, n):
         rows["delay margin"].append(rel_diff(m.dm, dm_ref))
     loops = "k·P·C (stable plant of order 2 or 3, PI or lead, k∈[0.3, 30])"
     note = f"; {skipped} skipped: python-control fell back to its FRD method" if skipped else ""
-    return [("stability_margins: gm pm wpc wgc", loops, rows["gm pm wpc wgc"]),
-            ("stability_margins: sm wms", loops + f"; {spurious} left out: python-control's spurious "
-             "stationary point at |1+L| = 1 far above the break frequencies", rows["sm wms"]),
-            ("margin", loops + ": gm pm wcg wcp", rows["margin"]),
-            ("delay margin", "same, vs min over python-control's crossovers of (PM mod 360°)/ω", rows["delay margin"]),
-            ("stability_margins (discrete): gm pm wpc wgc", "lead loops, c2d zoh, dt∈[0.1, 0.3]" + note,
-             rows["discrete gm pm wpc wgc"]),
-            ("stability_margins (discrete): sm", "same (python-control: scipy.optimize.minimize)", rows["discrete sm"]),
-            ("stability_margins (discrete): wms", "same", rows["discrete wms"])]
+    return [
+        ("stability_margins: gm pm wpc wgc", loops, rows["gm pm wpc wgc"]),
+        (
+            "stability_margins: sm wms",
+            loops + f"; {spurious} left out: python-control's spurious "
+            "stationary point at |1+L| = 1 far above the break frequencies",
+            rows["sm wms"],
+        ),
+        ("margin", loops + ": gm pm wcg wcp", rows["margin"]),
+        ("delay margin", "same, vs min over python-control's crossovers of (PM mod 360°)/ω", rows["delay margin"]),
+        (
+            "stability_margins (discrete): gm pm wpc wgc",
+            "lead loops, c2d zoh, dt∈[0.1, 0.3]" + note,
+            rows["discrete gm pm wpc wgc"],
+        ),
+        ("stability_margins (discrete): sm", "same (python-control: scipy.optimize.minimize)", rows["discrete sm"]),
+        ("stability_margins (discrete): wms", "same", rows["discrete wms"]),
+    ]
 
 
 # gradients: jitted once, the random data passed as arguments (shapes fixed: n = 3, SISO)
@@ -382,17 +438,18 @@ _MARGIN_FIELDS = ("gm", "pm", "sm", "wpc", "wgc", "wms")
 def _grad_targets(a, b, c, d):
     """Scalar functions of ``A`` (with ``B, C, D``) whose gradients are compared with finite differences."""
     zeros = lt.zero(lt.ss(a, b, c, d))
-    return jnp.stack([
-        jnp.sum(lt.step_response(lt.ss(a, b, c, d), _T).outputs ** 2),
-        jnp.sum(lt.frequency_response(lt.ss(a, b, c, d), _W).magnitude),
-        jnp.sum(jnp.where(jnp.isfinite(zeros), jnp.abs(zeros), 0.0)),
-        jnp.sum(lt.place(a, b, _POLES) ** 2),
-        jnp.sum(lt.c2d(lt.ss(a, b, c, d), 0.2).b ** 2),
-    ])
+    return jnp.stack(
+        [
+            jnp.sum(lt.step_response(lt.ss(a, b, c, d), _T).outputs ** 2),
+            jnp.sum(lt.frequency_response(lt.ss(a, b, c, d), _W).magnitude),
+            jnp.sum(jnp.where(jnp.isfinite(zeros), jnp.abs(zeros), 0.0)),
+            jnp.sum(lt.place(a, b, _POLES) ** 2),
+            jnp.sum(lt.c2d(lt.ss(a, b, c, d), 0.2).b ** 2),
+        ]
+    )
 
 
-_GRAD_NAMES = ("d step_response/dA", "d frequency_response/dA", "d zero/dA", "d place/dA (1 input)",
-               "d c2d(zoh)/dA")
+_GRAD_NAMES = ("d step_response/dA", "d frequency_response/dA", "d zero/dA", "d place/dA (1 input)", "d c2d(zoh)/dA")
 
 
 @jax.jit
@@ -419,17 +476,29 @@ def check_gradients(rng, n):
         for i in np.flatnonzero(np.isfinite(values)):
             fd = fd_gradient(lambda th, i=i: _margin_targets(th, num, den)[i], theta0)
             out["d margins/d(k, z)"].append(rel_diff(jac[i], fd))
-    desc = {"d step_response/dA": "rss n=3 SISO, Σy² over 51 points",
-            "d frequency_response/dA": "same, Σ|G| over 7 frequencies",
-            "d margins/d(k, z)": "(finite ones of) the six margins and the delay margin of k(s+z)/s · P, P of order 2",
-            "d zero/dA": "rss n=3, Σ|zeros|",
-            "d place/dA (1 input)": "rss n=3, ΣK² for fixed poles",
-            "d c2d(zoh)/dA": "rss n=3, ΣBd², Ts=0.2"}
+    desc = {
+        "d step_response/dA": "rss n=3 SISO, Σy² over 51 points",
+        "d frequency_response/dA": "same, Σ|G| over 7 frequencies",
+        "d margins/d(k, z)": "(finite ones of) the six margins and the delay margin of k(s+z)/s · P, P of order 2",
+        "d zero/dA": "rss n=3, Σ|zeros|",
+        "d place/dA (1 input)": "rss n=3, ΣK² for fixed poles",
+        "d c2d(zoh)/dA": "rss n=3, ΣBd², Ts=0.2",
+    }
     return [(k + " vs FD", desc[k], v) for k, v in out.items()]
 
 
-CHECKS = (check_construct, check_interconnect, check_c2d, check_structure, check_placement, check_design,
-          check_time, check_frequency, check_margins, check_gradients)
+CHECKS = (
+    check_construct,
+    check_interconnect,
+    check_c2d,
+    check_structure,
+    check_placement,
+    check_design,
+    check_time,
+    check_frequency,
+    check_margins,
+    check_gradients,
+)
 
 
 def main(argv=None) -> dict:
@@ -445,18 +514,24 @@ def main(argv=None) -> dict:
     for check in CHECKS:
         t0 = time.perf_counter()
         for name, desc, diffs in check(rng, args.n if check is not check_gradients else max(1, args.n // 4)):
-            rows.append({"function": name, "systems": f"{len(diffs)} × {desc}",
-                         "worst": float(np.max(diffs)) if diffs else float("nan")})
+            rows.append(
+                {
+                    "function": name,
+                    "systems": f"{len(diffs)} × {desc}",
+                    "worst": float(np.max(diffs)) if diffs else float("nan"),
+                }
+            )
         seconds[check.__name__] = time.perf_counter() - t0
     width = max(len(r["function"]) for r in rows)
-    print(f"jaxsim.lti vs python-control {ct.__version__} (seed {args.seed}, "
-          f"{time.perf_counter() - start:.0f} s)\n")
+    print(f"jaxsim.lti vs python-control {ct.__version__} (seed {args.seed}, {time.perf_counter() - start:.0f} s)\n")
     print(f"| {'function':{width}s} | worst difference | systems tried |")
     print(f"|{'-' * (width + 2)}|------------------|---------------|")
     for r in rows:
         print(f"| {r['function']:{width}s} | {r['worst']:16.1e} | {r['systems']} |")
-    print("\nseconds per check (mostly XLA compilation): "
-          + ", ".join(f"{k.removeprefix('check_')} {v:.0f}" for k, v in seconds.items()))
+    print(
+        "\nseconds per check (mostly XLA compilation): "
+        + ", ".join(f"{k.removeprefix('check_')} {v:.0f}" for k, v in seconds.items())
+    )
     out = {"seed": args.seed, "n": args.n, "python_control": ct.__version__, "rows": rows, "seconds": seconds}
     write_json(args.json, out)
     return out

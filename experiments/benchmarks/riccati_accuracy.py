@@ -40,8 +40,9 @@ def rows(skip_large: bool = False) -> list[dict]:
 
     out = []
     for discrete, cases in ((False, carex()), (True, darex())):
-        ours_fn, ref_fn = ((solve_discrete_are, sl.solve_discrete_are) if discrete
-                           else (solve_continuous_are, sl.solve_continuous_are))
+        ours_fn, ref_fn = (
+            (solve_discrete_are, sl.solve_discrete_are) if discrete else (solve_continuous_are, sl.solve_continuous_are)
+        )
         residual = scipy_dare_residual if discrete else scipy_care_residual
         for name, (a, b, q, r) in cases.items():
             if skip_large and a.shape[0] > 200:
@@ -58,11 +59,15 @@ def rows(skip_large: bool = False) -> list[dict]:
                 theirs = float("nan")  # SciPy finds no solution
             target = SCIPY_ATOL[name]
             target_dec = None if target is None else -math.log10(target / 1.5)
-            ok = (ours >= target_dec - 1e-9) if target_dec is not None else (
-                not ours < theirs if not math.isnan(theirs) else math.isfinite(ours))
+            ok = (
+                (ours >= target_dec - 1e-9)
+                if target_dec is not None
+                else (not ours < theirs if not math.isnan(theirs) else math.isfinite(ours))
+            )
             marginal = bool(riccati_diagnostics(x, a, b, q, r, discrete=discrete).marginal)
-            out.append(dict(case=name, n=a.shape[0], target=target_dec, ours=ours, scipy=theirs,
-                            met=ok, marginal=marginal))
+            out.append(
+                dict(case=name, n=a.shape[0], target=target_dec, ours=ours, scipy=theirs, met=ok, marginal=marginal)
+            )
     return out
 
 
@@ -74,10 +79,14 @@ def main() -> None:
     print(f"{'case':9s} {'n':>4s} {'SciPy target':>12s} {'ours':>6s} {'SciPy':>6s}  met  marginal")
     table = rows(args.skip_large)
     for row in table:
-        print(f"{row['case']:9s} {row['n']:4d} {fmt(row['target']):>12s} {fmt(row['ours']):>6s} "
-              f"{fmt(row['scipy']):>6s}  {'yes' if row['met'] else 'NO ':3s}  {'yes' if row['marginal'] else ''}")
-    print(f"{sum(r['met'] for r in table)} of {len(table)} cases meet SciPy's target "
-          "(decimals: −log10 of the largest residual entry)")
+        print(
+            f"{row['case']:9s} {row['n']:4d} {fmt(row['target']):>12s} {fmt(row['ours']):>6s} "
+            f"{fmt(row['scipy']):>6s}  {'yes' if row['met'] else 'NO ':3s}  {'yes' if row['marginal'] else ''}"
+        )
+    print(
+        f"{sum(r['met'] for r in table)} of {len(table)} cases meet SciPy's target "
+        "(decimals: −log10 of the largest residual entry)"
+    )
 
 
 if __name__ == "__main__":

@@ -75,8 +75,10 @@ def check_unique(kind: str, a: np.ndarray, b: np.ndarray | None = None) -> None:
         pair, names = f"λ_i = {_fmt(lam[i])} of a and μ_j = {_fmt(mu[j])} of b", "a, b"
     else:
         pair, names = f"eigenvalues λ_i = {_fmt(lam[i])} and λ_j = {_fmt(mu[j])} of a", "a"
-    raise ValueError(f"{names}: {equation} is singular: {pair} give |{expr}| = {gaps[i, j]:.3g} ≤ {tol:.3g} "
-                     f"(round-off tolerance), so it has no unique solution (it needs {expr} ≠ 0 for all i, j)")
+    raise ValueError(
+        f"{names}: {equation} is singular: {pair} give |{expr}| = {gaps[i, j]:.3g} ≤ {tol:.3g} "
+        f"(round-off tolerance), so it has no unique solution (it needs {expr} ≠ 0 for all i, j)"
+    )
 
 
 def nan_if_singular(kind: str, x: jax.Array, a: jax.Array, b: jax.Array | None = None) -> jax.Array:

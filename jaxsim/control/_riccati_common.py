@@ -105,8 +105,9 @@ class _NewtonState(NamedTuple):
     k: jax.Array
 
 
-def newton(x0: jax.Array, residual: Callable, correction: Callable, max_steps: jax.Array,
-           patience: int = 4) -> jax.Array:
+def newton(
+    x0: jax.Array, residual: Callable, correction: Callable, max_steps: jax.Array, patience: int = 4
+) -> jax.Array:
     """Newton (defect-correction) steps ``x ← x + correction(x, residual(x))``; returns the iterate
     with the smallest ``‖residual‖`` (``x0`` included).
 
@@ -128,8 +129,13 @@ def newton(x0: jax.Array, residual: Callable, correction: Callable, max_steps: j
         x = sym(s.x + correction(s.x, residual(s.x)))
         rn = norm(x)
         better = rn < s.best_norm
-        return _NewtonState(x, jnp.where(better, x, s.best), jnp.where(better, rn, s.best_norm),
-                            jnp.where(better, 0, s.stalls + 1), s.k + 1)
+        return _NewtonState(
+            x,
+            jnp.where(better, x, s.best),
+            jnp.where(better, rn, s.best_norm),
+            jnp.where(better, 0, s.stalls + 1),
+            s.k + 1,
+        )
 
     n0 = norm(x0)
     return jax.lax.while_loop(cond, body, _NewtonState(x0, x0, n0, jnp.asarray(0), jnp.asarray(0))).best
@@ -146,8 +152,14 @@ POLISH_STEPS = 3  # Newton steps after the sign / doubling iteration of the firs
 MAX_NEWTON = 80  # Newton steps of the second attempt (linear convergence near the boundary)
 
 
-def solve_with_fallback(first_guess: Callable, residual: Callable, correction: Callable,
-                        measures: Callable, shift: jax.Array, template: jax.Array) -> tuple[jax.Array, jax.Array]:
+def solve_with_fallback(
+    first_guess: Callable,
+    residual: Callable,
+    correction: Callable,
+    measures: Callable,
+    shift: jax.Array,
+    template: jax.Array,
+) -> tuple[jax.Array, jax.Array]:
     """The two-attempt scheme of both Riccati solvers, as one loop (one compiled body).
 
     Attempt 1: ``first_guess(0, True)`` (sign function / doubling) and ``POLISH_STEPS`` Newton

@@ -119,7 +119,9 @@ def _init(params: TrackingParams, r0: Any, y0: jax.Array) -> jax.Array:
     return jnp.zeros(())
 
 
-def _step(params: TrackingParams, state: jax.Array, r: Any, y: Any, dt: Any, t: jax.Array) -> tuple[jax.Array, jax.Array]:
+def _step(
+    params: TrackingParams, state: jax.Array, r: Any, y: Any, dt: Any, t: jax.Array
+) -> tuple[jax.Array, jax.Array]:
     """``y``: a ``LeaderEstimate`` (fields ``follower``, ``target``); ``t``: tick time (s)."""
     tau = control_force(params, y.follower, y.target)
     return state, jnp.where(t >= params.t_start - 1e-9, tau, 0.0)
@@ -147,6 +149,12 @@ def auv_tracking(
         check_positive(name, value)
     check_positive("width", width)
     check_finite("t_start", t_start)
-    params = TrackingParams(jnp.asarray(lam, dtype=float), jnp.asarray(k_s, dtype=float),
-                            jnp.asarray(width, dtype=float), m, jnp.asarray(t_start, dtype=float), switch)
+    params = TrackingParams(
+        jnp.asarray(lam, dtype=float),
+        jnp.asarray(k_s, dtype=float),
+        jnp.asarray(width, dtype=float),
+        m,
+        jnp.asarray(t_start, dtype=float),
+        switch,
+    )
     return Controller(params, _init, _step, name=f"auv_tracking_{switch}")

@@ -101,8 +101,14 @@ def invert_characteristic(char: Any, v: float, channel: str) -> OperatingPoint:
     if isinstance(char, Linear):
         k = float(char.gain)
         if k == 0:
-            return OperatingPoint(float(sgn * np.inf) if x else 0.0, x == 0, SMALL_GAIN if x == 0 else NONE,
-                                  channel, v, "balance" if x == 0 else "none")
+            return OperatingPoint(
+                float(sgn * np.inf) if x else 0.0,
+                x == 0,
+                SMALL_GAIN if x == 0 else NONE,
+                channel,
+                v,
+                "balance" if x == 0 else "none",
+            )
         return OperatingPoint(v / k, True, SMALL_GAIN, channel, v, "balance")
     a, b, c, d = _breakpoints(char)
     k1, k2 = _gains(char)
@@ -130,8 +136,17 @@ def _static_p(K: float, char: Any, g: float, f: float) -> OperatingPoint:
     return OperatingPoint(float(sgn * e), True, SATURATED, "p", v, "saturated")
 
 
-def steady_state_error(plant: PlantKind, K: float, p: Any = None, i: Any = None, *, g: float = 0.0,
-                       g_slope: float = 0.0, f: float = 0.0, f_slope: float = 0.0) -> OperatingPoint:
+def steady_state_error(
+    plant: PlantKind,
+    K: float,
+    p: Any = None,
+    i: Any = None,
+    *,
+    g: float = 0.0,
+    g_slope: float = 0.0,
+    f: float = 0.0,
+    f_slope: float = 0.0,
+) -> OperatingPoint:
     """Analytic steady state of the loop with channels ``p`` (P/PD) and optionally ``i`` (PI/PID).
 
     Args:

@@ -87,8 +87,9 @@ def kalman_bucy(a, c, w, v, g=None, *, names: tuple[str, str, str, str] = ("a", 
     return KalmanBucyGain(cho_solve(cho_factor(v), ct.T @ p).T, p)
 
 
-def discrete_kalman(a, c, q, r, g=None, *,
-                    names: tuple[str, str, str, str] = ("a", "c", "q", "r")) -> DiscreteKalmanGain:
+def discrete_kalman(
+    a, c, q, r, g=None, *, names: tuple[str, str, str, str] = ("a", "c", "q", "r")
+) -> DiscreteKalmanGain:
     """Steady-state discrete Kalman filter gain and covariances (argument shapes as :func:`kalman_bucy`,
     with ``q``, ``r`` the process and measurement covariances per step)."""
     at, ct, gqg, r = _checked_dual(a, c, q, r, g, discrete=True, names=names)

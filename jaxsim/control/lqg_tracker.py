@@ -81,8 +81,15 @@ def design(
     x_eq = jnp.asarray(x_eq, dtype=a.dtype)
     u_eq = jnp.asarray(u_eq, dtype=a.dtype)
     return LQGTrackerParams(
-        x_eq=x_eq, u_eq=u_eq, y_eq=c @ x_eq, k=k, pi=pi, gamma=gamma, phi=phi,
-        gamma_u=gam[:, :m], gamma_y=gam[:, m:],
+        x_eq=x_eq,
+        u_eq=u_eq,
+        y_eq=c @ x_eq,
+        k=k,
+        pi=pi,
+        gamma=gamma,
+        phi=phi,
+        gamma_u=gam[:, :m],
+        gamma_y=gam[:, m:],
         u_min=jnp.broadcast_to(jnp.asarray(u_min, a.dtype), (m,)),
         u_max=jnp.broadcast_to(jnp.asarray(u_max, a.dtype), (m,)),
     )

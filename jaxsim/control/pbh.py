@@ -79,7 +79,12 @@ def _fmt(modes: list[complex]) -> str:
 
 
 def check_stabilizable(
-    a_name: str, a: np.ndarray, b_name: str, b: np.ndarray, *, discrete: bool = False,
+    a_name: str,
+    a: np.ndarray,
+    b_name: str,
+    b: np.ndarray,
+    *,
+    discrete: bool = False,
     rtol: float = DEFAULT_RTOL,
 ) -> None:
     """Raise ``ValueError`` if ``(a, b)`` is not stabilisable."""
@@ -93,7 +98,12 @@ def check_stabilizable(
 
 
 def check_detectable(
-    a_name: str, a: np.ndarray, c_name: str, c: np.ndarray, *, discrete: bool = False,
+    a_name: str,
+    a: np.ndarray,
+    c_name: str,
+    c: np.ndarray,
+    *,
+    discrete: bool = False,
     rtol: float = DEFAULT_RTOL,
 ) -> None:
     """Raise ``ValueError`` if ``(a, c)`` is not detectable."""
@@ -107,8 +117,14 @@ def check_detectable(
 
 
 def check_no_unobservable_boundary_modes(
-    a_name: str, a: np.ndarray, q_name: str, q: np.ndarray, *, discrete: bool = False,
-    dual: bool = False, rtol: float = DEFAULT_RTOL,
+    a_name: str,
+    a: np.ndarray,
+    q_name: str,
+    q: np.ndarray,
+    *,
+    discrete: bool = False,
+    dual: bool = False,
+    rtol: float = DEFAULT_RTOL,
 ) -> None:
     """Raise if a mode of ``a`` on the stability boundary is unobservable from the weight ``q``.
 
@@ -118,8 +134,7 @@ def check_no_unobservable_boundary_modes(
     the process-noise covariance ``q``.
     """
     a, q = np.asarray(a), np.asarray(q)
-    bad = uncontrollable_modes(a if dual else a.T, q if dual else q.T, discrete=discrete,
-                               region="boundary", rtol=rtol)
+    bad = uncontrollable_modes(a if dual else a.T, q if dual else q.T, discrete=discrete, region="boundary", rtol=rtol)
     if bad:
         where = "unit circle" if discrete else "imaginary axis"
         what = "not stabilisable from the process noise" if dual else "not detectable"

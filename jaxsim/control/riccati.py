@@ -71,8 +71,17 @@ from jaxsim.core.validation import (
 )
 
 __all__ = [
-    "MarginalStabilityWarning", "RiccatiDiagnostics", "balanced_data", "care_residual", "check_stabilising", "dare_gain", "dare_residual",
-    "gain_matrix", "riccati_diagnostics", "solve_continuous_are", "solve_discrete_are",
+    "MarginalStabilityWarning",
+    "RiccatiDiagnostics",
+    "balanced_data",
+    "care_residual",
+    "check_stabilising",
+    "dare_gain",
+    "dare_residual",
+    "gain_matrix",
+    "riccati_diagnostics",
+    "solve_continuous_are",
+    "solve_discrete_are",
 ]
 
 
@@ -239,8 +248,10 @@ def _explain_failure(a, b, q, r, what: str, names, discrete: bool, dual: bool) -
     if bad:
         pair, prop, how = _pair_words(names, dual)
         kind = "|λ| ≥ 1" if discrete else "Re λ ≥ 0"
-        raise ValueError(f"{pair}: {prop} — mode(s) {_fmt(bad)} with {kind} are {how} (PBH test on "
-                         f"the balanced pair); {what} has no stabilising solution")
+        raise ValueError(
+            f"{pair}: {prop} — mode(s) {_fmt(bad)} with {kind} are {how} (PBH test on "
+            f"the balanced pair); {what} has no stabilising solution"
+        )
     raise ValueError(
         f"({', '.join(names)}): {what} has no solution that could be computed — neither a stabilising "
         "one nor a maximal one with a marginally stable closed loop (e.g. no symmetric solution "
@@ -261,7 +272,10 @@ def _check_concrete_result(x, a, b, q, r, what: str, names, discrete: bool, dual
             f"({', '.join(names)}): {what}'s closed loop is only marginally stable ({where} = "
             f"{float(diag.stability_margin):.2e}): the returned solution is the maximal one, not a "
             "robustly stabilising one (the Hamiltonian / symplectic pencil has eigenvalues on or "
-            "within rounding of the stability boundary)", MarginalStabilityWarning, stacklevel=3)
+            "within rounding of the stability boundary)",
+            MarginalStabilityWarning,
+            stacklevel=3,
+        )
 
 
 def check_stabilising(x, a, b, q, r, *, discrete: bool, names=("a", "b", "q", "r"), dual: bool = False) -> None:
@@ -278,7 +292,8 @@ def check_stabilising(x, a, b, q, r, *, discrete: bool, names=("a", "b", "q", "r
         how = "uncontrollable" if dual else "unobservable"
         raise ValueError(
             f"({names[0]}, {names[2]}): {what} — mode(s) {_fmt(bad)} on the {where} are {how} from "
-            f"{names[2]}, so no stabilising Riccati solution exists (PBH test on the balanced data)")
+            f"{names[2]}, so no stabilising Riccati solution exists (PBH test on the balanced data)"
+        )
 
 
 def solve_continuous_are(a, b, q, r, *, names=("a", "b", "q", "r"), dual: bool = False) -> jax.Array:

@@ -35,7 +35,7 @@ Structure = str  # "P", "PI", "PD", "PID"
 def _trim(p: np.ndarray) -> np.ndarray:
     p = np.atleast_1d(np.asarray(p, float))
     nz = np.flatnonzero(np.abs(p) > 0)
-    return p[nz[0]:] if nz.size else np.zeros(1)
+    return p[nz[0] :] if nz.size else np.zeros(1)
 
 
 def _check_poly(name: str, p: Sequence[float], what: str, why: str) -> np.ndarray:
@@ -178,8 +178,9 @@ def max_stability_degree(
             whose stability degree is unbounded (as many free gains as closed-loop poles: the
             poles can be moved arbitrarily far left).
     """
-    num = _check_poly("num", num, "numerator", "no controller gain reaches the closed-loop poles, "
-                      "so there is nothing to design")
+    num = _check_poly(
+        "num", num, "numerator", "no controller gain reaches the closed-loop poles, so there is nothing to design"
+    )
     den = _check_poly("den", den, "denominator", "not a transfer function")
     fixed = dict(fixed or {})
     names = gain_names(structure)
@@ -208,7 +209,9 @@ def max_stability_degree(
     for _ in range(n_starts):
         start = np.exp(rng.uniform(np.log(1e-3), np.log(gain_scale), size=len(free)))
         res = scipy.optimize.minimize(
-            lambda k: -degree_of(k), start, method="Nelder-Mead",
+            lambda k: -degree_of(k),
+            start,
+            method="Nelder-Mead",
             options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 4000},
         )
         if -res.fun > best_eta:
@@ -221,9 +224,9 @@ def max_stability_degree(
         if eta_c >= best_eta - 1e-4 * max(1.0, abs(eta_c)):
             gains = full(k_c)
             cp = c0 + m @ k_c
-            return StabilityDegreeDesign(dict(zip(names, gains)), float(eta_c), np.roots(cp),
-                                         cp, "coalesced", float(best_eta))
+            return StabilityDegreeDesign(
+                dict(zip(names, gains)), float(eta_c), np.roots(cp), cp, "coalesced", float(best_eta)
+            )
     gains = full(best_k)
     cp = c0 + m @ best_k
-    return StabilityDegreeDesign(dict(zip(names, gains)), float(best_eta), np.roots(cp), cp,
-                                 "search", float(best_eta))
+    return StabilityDegreeDesign(dict(zip(names, gains)), float(best_eta), np.roots(cp), cp, "search", float(best_eta))

@@ -74,8 +74,7 @@ def regulator_equations(a, b, c, exo: Exosystem) -> tuple[jax.Array, jax.Array]:
     for name, v in (("a", a), ("b", b), ("c", c), ("exo.s", s), ("exo.q_r", q_r)):
         check_finite(name, v)
     eye_q = jnp.eye(q, dtype=a.dtype)
-    top = jnp.concatenate([jnp.kron(s.T, jnp.eye(n, dtype=a.dtype)) - jnp.kron(eye_q, a),
-                           -jnp.kron(eye_q, b)], axis=1)
+    top = jnp.concatenate([jnp.kron(s.T, jnp.eye(n, dtype=a.dtype)) - jnp.kron(eye_q, a), -jnp.kron(eye_q, b)], axis=1)
     bottom = jnp.concatenate([jnp.kron(eye_q, c), jnp.zeros((p * q, m * q), a.dtype)], axis=1)
     lhs = jnp.concatenate([top, bottom], axis=0)
     if is_concrete(lhs):
@@ -88,7 +87,7 @@ def regulator_equations(a, b, c, exo: Exosystem) -> tuple[jax.Array, jax.Array]:
     rhs = jnp.concatenate([jnp.zeros(n * q, a.dtype), _vec(q_r)])
     z = jnp.linalg.solve(lhs, rhs)
     pi = z[: n * q].reshape(q, n).T
-    gamma = z[n * q:].reshape(q, m).T
+    gamma = z[n * q :].reshape(q, m).T
     return pi, gamma
 
 

@@ -80,8 +80,7 @@ def _select(v: jax.Array, channels: Channels) -> jax.Array:
 
 def additive(rate: Callable[[Tick, jax.Array], jax.Array]) -> RunningCost:
     """The running cost ``Σ_k rate(tick_k, ts)`` (accumulator: one scalar)."""
-    return RunningCost(init=_zero, update=lambda acc, tick, ts: acc + rate(tick, ts), finish=lambda acc: acc,
-                       rate=rate)
+    return RunningCost(init=_zero, update=lambda acc, tick, ts: acc + rate(tick, ts), finish=lambda acc: acc, rate=rate)
 
 
 def _error(tick: Tick, channels: Channels) -> jax.Array:
@@ -114,8 +113,9 @@ def control_energy(offset: Any = 0.0, channels: Channels = None) -> RunningCost:
 
 def saturation_excess(u_max: Any, channels: Channels = None) -> RunningCost:
     """``∫ Σ max(0, |u| − u_max)² dt`` on the commanded input (input units² × s)."""
-    return additive(lambda tick, ts: jnp.sum(
-        metrics.saturation_excess_integrand(_select(tick.u, channels), u_max)) * ts)
+    return additive(
+        lambda tick, ts: jnp.sum(metrics.saturation_excess_integrand(_select(tick.u, channels), u_max)) * ts
+    )
 
 
 def penalty(g: Callable[[Tick], jax.Array], weight: float = 1.0) -> RunningCost:
@@ -126,8 +126,9 @@ def penalty(g: Callable[[Tick], jax.Array], weight: float = 1.0) -> RunningCost:
 def terminal(fn: Callable[[Tick], jax.Array]) -> RunningCost:
     """``fn(last tick)``: a cost of the last tick of the horizon (time ``t_final − ts``: ticks are
     recorded at their start), e.g. ``lambda tick: (tick.r[0] - tick.y[0]) ** 2``.  Not additive."""
-    return RunningCost(init=_zero, update=lambda acc, tick, ts: jnp.asarray(fn(tick), acc.dtype).reshape(()),
-                       finish=lambda acc: acc)
+    return RunningCost(
+        init=_zero, update=lambda acc, tick, ts: jnp.asarray(fn(tick), acc.dtype).reshape(()), finish=lambda acc: acc
+    )
 
 
 class _SoftmaxAcc(NamedTuple):
@@ -172,15 +173,21 @@ def soft_overshoot(temperature: float = 0.5, channel: int = 0, y_final: Any = No
     return RunningCost(init=_softmax_init, update=update, finish=finish)
 
 
-def soft_settling_time(band: float = 0.02, band_temperature: float = 0.002, time_temperature: float = 0.02,
-                       channel: int = 0, y_final: Any = None) -> RunningCost:
+def soft_settling_time(
+    band: float = 0.02,
+    band_temperature: float = 0.002,
+    time_temperature: float = 0.02,
+    channel: int = 0,
+    y_final: Any = None,
+) -> RunningCost:
     """Smooth settling time (s) of output ``channel``, online: equals
     :func:`jaxsim.core.metrics.soft_settling_time` of the same samples (``y_final`` as in
     :func:`soft_overshoot`).  Not additive."""
 
     def update(acc, tick, ts):
-        v = metrics.settling_samples(tick.t + ts, tick.y[channel], _target(tick, channel, y_final), band,
-                                     band_temperature)
+        v = metrics.settling_samples(
+            tick.t + ts, tick.y[channel], _target(tick, channel, y_final), band, band_temperature
+        )
         return _softmax_push(acc, v, time_temperature)
 
     return RunningCost(init=_softmax_init, update=update, finish=lambda acc: acc.w / acc.s)
@@ -235,6 +242,7 @@ def combine(**terms: Any) -> Objective:
 
     rate = None
     if all(c.rate is not None for c in costs):
+
         def rate(tick, ts):
             return sum(w * c.rate(tick, ts) for w, c in zip(weights, costs))
 
@@ -252,8 +260,14 @@ def accumulate(cost: RunningCost | Objective, ticks: Tick, ts: Any) -> Any:
     return cost.finish(acc)
 
 
-def rollout_cost(cost: RunningCost | Objective, loop: ClosedLoop, x0: jax.Array, timing: Timing,
-                 key: jax.Array | None = None, solver: Solver = RK4) -> Any:
+def rollout_cost(
+    cost: RunningCost | Objective,
+    loop: ClosedLoop,
+    x0: jax.Array,
+    timing: Timing,
+    key: jax.Array | None = None,
+    solver: Solver = RK4,
+) -> Any:
     """``finish`` of ``cost`` over one rollout of ``loop`` (:func:`~jaxsim.core.rollout.fold`: nothing
     stored per tick); a :class:`Breakdown` for an :class:`Objective`, else a scalar."""
     ts = timing.ts

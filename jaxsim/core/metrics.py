@@ -154,8 +154,9 @@ def overshoot_samples(y: jax.Array, y_final: jax.Array) -> jax.Array:
     return 100.0 * (jnp.sign(y_final) * y - jnp.abs(y_final)) / jnp.abs(y_final)
 
 
-def settling_samples(t_next: jax.Array, y: jax.Array, y_final: jax.Array, band: float,
-                     band_temperature: float) -> jax.Array:
+def settling_samples(
+    t_next: jax.Array, y: jax.Array, y_final: jax.Array, band: float, band_temperature: float
+) -> jax.Array:
     """``t_{i+1}·σ((|y_i/y_f − 1| − band)/τ_b)``: the time a sample would set the settling time, s."""
     return t_next * jax.nn.sigmoid((jnp.abs(y / y_final - 1) - band) / band_temperature)
 

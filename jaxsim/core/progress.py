@@ -21,16 +21,22 @@ class NullBar:
     def close(self) -> None: ...
 
 
-def progress_bar(progress: Any, *, total: int, desc: str, unit: str, initial: int = 0,
-                 unit_scale: bool = False) -> Any:
+def progress_bar(progress: Any, *, total: int, desc: str, unit: str, initial: int = 0, unit_scale: bool = False) -> Any:
     """The bar ``progress`` asks for (see the module docstring)."""
     if progress is None or progress is False:
         return NullBar()
     if progress is True:
         from tqdm.auto import tqdm
 
-        return tqdm(total=total, desc=desc, unit=unit, initial=initial, unit_scale=unit_scale, file=sys.stderr,
-                    dynamic_ncols=True)
+        return tqdm(
+            total=total,
+            desc=desc,
+            unit=unit,
+            initial=initial,
+            unit_scale=unit_scale,
+            file=sys.stderr,
+            dynamic_ncols=True,
+        )
     if not callable(progress):
         raise ValueError(f"progress: must be a bool or a bar factory, got {type(progress).__name__}")
     return progress(total=total, desc=desc, unit=unit, initial=initial, unit_scale=unit_scale)

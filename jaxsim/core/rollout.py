@@ -58,9 +58,7 @@ class ClosedLoop:
     disturbance: Any = Constant(0.0)
     sensor: Sensor | None = None
     estimator: Estimator | None = None
-    actuate: Callable[[jax.Array, jax.Array], jax.Array] = static_field(
-        default=subtract_input_disturbance
-    )
+    actuate: Callable[[jax.Array, jax.Array], jax.Array] = static_field(default=subtract_input_disturbance)
 
 
 @dataclass(frozen=True)
@@ -90,19 +88,18 @@ class Timing:
         check_positive("t_final", self.t_final)
         steps = float(self.t_final) / float(self.dt)
         if steps > MAX_STEPS + 0.5:
-            raise ValueError(f"t_final: t_final/dt = {steps:.6g} steps exceeds the limit of {MAX_STEPS} "
-                             "(2**31 − 1) integration steps per rollout; shorten t_final or enlarge dt")
+            raise ValueError(
+                f"t_final: t_final/dt = {steps:.6g} steps exceeds the limit of {MAX_STEPS} "
+                "(2**31 − 1) integration steps per rollout; shorten t_final or enlarge dt"
+            )
         substeps = check_period_multiple("controller_period", self.ts, self.dt, "dt")
         n_ticks = check_period_multiple("t_final", self.t_final, self.ts, "controller_period")
         sensor_every = 1
         if sensor_period is not None:
-            sensor_every = check_period_multiple(
-                "sensor_period", sensor_period, self.ts, "controller_period"
-            )
+            sensor_every = check_period_multiple("sensor_period", sensor_period, self.ts, "controller_period")
         if int(self.save_every) < 1 or n_ticks % int(self.save_every):
             raise ValueError(
-                f"save_every: must be a positive divisor of the number of ticks ({n_ticks}), "
-                f"got {self.save_every!r}"
+                f"save_every: must be a positive divisor of the number of ticks ({n_ticks}), got {self.save_every!r}"
             )
         return n_ticks, substeps, sensor_every
 
@@ -161,7 +158,7 @@ def hold_input(
     dt: jax.Array,
     substeps: int,
     solver: Solver = RK4,
-    disturbance: Any = Constant(0.0),
+    disturbance: Any = Constant(0.0),  # noqa: B008  (an immutable default)
     actuate: Callable[[jax.Array, jax.Array], jax.Array] = subtract_input_disturbance,
 ) -> jax.Array:
     """Plant state after ``substeps`` solver steps of ``dt`` from ``(t0, x)`` with the input ``u``
@@ -184,14 +181,15 @@ def _check_plant(plant: Plant, x0: jax.Array, t0: jax.Array) -> None:
     """``output`` and ``feedthrough`` must return ``(n_outputs,)`` and ``dynamics`` ``(n_states,)``
     (traced, not run)."""
     label = f"plant {plant.name!r}"
-    check_returns_shape(f"{label}: output(params, x)", plant.output, plant.params, x0,
-                        shape=(plant.n_outputs,))
+    check_returns_shape(f"{label}: output(params, x)", plant.output, plant.params, x0, shape=(plant.n_outputs,))
     u0 = jnp.zeros(plant.n_inputs, x0.dtype)
     if plant.feedthrough is not None:
-        check_returns_shape(f"{label}: feedthrough(params, u)", plant.feedthrough, plant.params, u0,
-                            shape=(plant.n_outputs,))
-    check_returns_shape(f"{label}: dynamics(params, x, u, t)", plant.dynamics, plant.params, x0, u0, t0,
-                        shape=(plant.n_states,))
+        check_returns_shape(
+            f"{label}: feedthrough(params, u)", plant.feedthrough, plant.params, u0, shape=(plant.n_outputs,)
+        )
+    check_returns_shape(
+        f"{label}: dynamics(params, x, u, t)", plant.dynamics, plant.params, x0, u0, t0, shape=(plant.n_states,)
+    )
 
 
 def _check_step_signature(ctrl: Controller) -> None:
@@ -206,7 +204,8 @@ def _check_step_signature(ctrl: Controller) -> None:
     except TypeError:
         raise ValueError(
             f"controller {ctrl.name!r}: step must accept (params, state, r, y, dt, t) — six positional "
-            f"arguments, t the tick time in s — got the signature {sig}") from None
+            f"arguments, t the tick time in s — got the signature {sig}"
+        ) from None
 
 
 def _check_input_shapes(loop: ClosedLoop, u: jax.ShapeDtypeStruct, r0: jax.Array, t0: jax.Array) -> None:
@@ -218,24 +217,28 @@ def _check_input_shapes(loop: ClosedLoop, u: jax.ShapeDtypeStruct, r0: jax.Array
             raise ValueError(
                 f"reference: the signal has shape {tuple(r0.shape)} at t = 0, but plant {plant.name!r} has "
                 f"n_outputs={p}; controller {ctrl.name!r} then returns u of shape {tuple(u.shape)}, "
-                f"expected ({m},) (n_inputs={m})")
+                f"expected ({m},) (n_inputs={m})"
+            )
         raise ValueError(
             f"controller {ctrl.name!r}: step(params, state, r, y, dt, t) returns u of shape {tuple(u.shape)}, "
-            f"expected ({m},) for plant {plant.name!r} (n_inputs={m})")
+            f"expected ({m},) for plant {plant.name!r} (n_inputs={m})"
+        )
     d0 = jax.eval_shape(loop.disturbance, t0)
     actuated = jax.eval_shape(loop.actuate, u, d0)
     if actuated.shape != (m,):
         raise ValueError(
             f"disturbance: the signal has shape {tuple(d0.shape)} at t = 0; actuate(u, d) then gives a "
             f"plant input of shape {tuple(actuated.shape)}, expected ({m},) (plant {plant.name!r} has "
-            f"n_inputs={m})")
+            f"n_inputs={m})"
+        )
 
 
 def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | None, solver: Solver):
     """Validate, then return ``(tick, carry0, n_ticks)`` with ``tick(carry) -> (carry, Tick)``.
 
     Checked once here, on concrete and traced loops alike: ``x0`` shape, the plant's ``output``,
-    ``feedthrough`` (if any) and ``dynamics`` shapes, the controller output shape (blaming the reference when its size differs
+    ``feedthrough`` (if any) and ``dynamics`` shapes, the controller output shape (blaming the reference when its
+    size differs
     from the plant's outputs) and the disturbed plant input.  On concrete values only: ``x0`` and the
     signal parameters finite (:func:`~jaxsim.core.signals.check_signal`); traced NaN propagates.
     """
@@ -244,8 +247,7 @@ def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | N
     x0 = jnp.asarray(x0)
     if x0.ndim != 1 or x0.shape[0] != loop.plant.n_states:
         raise ValueError(
-            f"x0: expected shape ({loop.plant.n_states},) for plant {loop.plant.name!r}, "
-            f"got {tuple(x0.shape)}"
+            f"x0: expected shape ({loop.plant.n_states},) for plant {loop.plant.name!r}, got {tuple(x0.shape)}"
         )
     check_finite("x0", x0)
     check_signal("reference", loop.reference)
@@ -287,8 +289,9 @@ def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | N
         if est is not None:
             est_state = est.predict(est.params, est_state, u, ts)
         x_next = advance_plant(c.x, u, t)
-        rec = Tick(t, c.x, plant.h(c.x, c.u_prev), y_held, arrived, u, r, loop.disturbance(t),
-                   None if est is None else seen)
+        rec = Tick(
+            t, c.x, plant.h(c.x, c.u_prev), y_held, arrived, u, r, loop.disturbance(t), None if est is None else seen
+        )
         u_held = None if c.u_prev is None else jnp.asarray(u, dtype)
         return _Carry(c.k + 1, x_next, y_held, ctrl_state, est_state, u_held), rec
 

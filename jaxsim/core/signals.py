@@ -141,8 +141,10 @@ class Piecewise:
         """``times`` 1-D and non-decreasing, one row of ``values`` per time (see :func:`check_signal`)."""
         shape_t, shape_v = np.shape(self.times), np.shape(self.values)
         if len(shape_t) != 1 or len(shape_v) not in (1, 2) or shape_v[0] != shape_t[0]:
-            raise ValueError(f"{name}.values: expected shape ({shape_t[0] if shape_t else 'p'},) or "
-                             f"(p, k) to match times of shape {shape_t}, got {shape_v}")
+            raise ValueError(
+                f"{name}.values: expected shape ({shape_t[0] if shape_t else 'p'},) or "
+                f"(p, k) to match times of shape {shape_t}, got {shape_v}"
+            )
         if is_concrete(self.times) and np.any(np.diff(np.asarray(self.times)) < 0):
             raise ValueError(f"{name}.times: must be non-decreasing, got {np.asarray(self.times)!r}")
 

@@ -107,9 +107,7 @@ class Sensor:
     """A sensor delivering ``measure(params, key, y, t)`` every ``period`` (None: every tick)."""
 
     params: Any = 0.0
-    measure: Callable[[Any, jax.Array, jax.Array, jax.Array], jax.Array] = static_field(
-        default=_gaussian_measure
-    )
+    measure: Callable[[Any, jax.Array, jax.Array, jax.Array], jax.Array] = static_field(default=_gaussian_measure)
     period: float | None = static_field(default=None)
     name: str = static_field(default="sensor")
 

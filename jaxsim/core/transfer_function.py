@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+
 from jaxsim.core.validation import check_finite, check_square, is_concrete
 
 

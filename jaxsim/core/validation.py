@@ -33,8 +33,9 @@ def check_shape(name: str, x: Any, shape: tuple[int | None, ...]) -> None:
         raise ValueError(f"{name}: expected shape {want}, got {actual}")
 
 
-def check_returns_shape(name: str, fn: Callable[..., Any], *args: Any,
-                        shape: tuple[int | None, ...]) -> jax.ShapeDtypeStruct:
+def check_returns_shape(
+    name: str, fn: Callable[..., Any], *args: Any, shape: tuple[int | None, ...]
+) -> jax.ShapeDtypeStruct:
     """Require ``fn(*args)`` to return one array of shape ``shape``; return its shape and dtype.
 
     ``fn`` is traced abstractly (``jax.eval_shape``: nothing is computed), so this is cheap and works
@@ -157,8 +158,7 @@ def check_period_multiple(name: str, period: float, base: float, base_name: str)
     n = int(round(ratio))
     if n < 1 or not math.isclose(ratio, n, rel_tol=1e-9, abs_tol=1e-9):
         raise ValueError(
-            f"{name}: must be an integer multiple of {base_name}={base!r}, got {period!r} "
-            f"(ratio {ratio:.6g})"
+            f"{name}: must be an integer multiple of {base_name}={base!r}, got {period!r} (ratio {ratio:.6g})"
         )
     return n
 

@@ -25,5 +25,16 @@ ENVIRONMENTS = {
 for _name, _factory in ENVIRONMENTS.items():
     register_environment(_name, _factory)
 
-__all__ = ["ENVIRONMENTS", "PlantEnv", "PlantState", "Task", "astatic_second_order_env", "auv_env", "itae_step",
-           "observe_state_and_error", "static_second_order_env", "trms_env", "trms_task"]
+__all__ = [
+    "ENVIRONMENTS",
+    "PlantEnv",
+    "PlantState",
+    "Task",
+    "astatic_second_order_env",
+    "auv_env",
+    "itae_step",
+    "observe_state_and_error",
+    "static_second_order_env",
+    "trms_env",
+    "trms_task",
+]

@@ -18,7 +18,7 @@ import jax.numpy as jnp
 
 from jaxsim.core.signals import Constant
 from jaxsim.envs.plant_env import PlantEnv, Task
-from jaxsim.plants.auv import AUVParams, N_STATES, auv_plant
+from jaxsim.plants.auv import N_STATES, AUVParams, auv_plant
 
 DEFAULT_TARGET = (2.0, 1.0, 0.5, 0.0, 0.0, 0.5)  # m, m, m (down), rad, rad, rad
 
@@ -32,13 +32,30 @@ def pose_loss(dt: float, effort_weight: float, tau_scale: float):
     return loss
 
 
-def auv_env(params: AUVParams | None = None, target: Any = DEFAULT_TARGET, tau_max: float = 100.0,
-            effort_weight: float = 1e-3, dt: float = 0.05, substeps: int = 5, x0_spread: Any = 0.0) -> PlantEnv:
+def auv_env(
+    params: AUVParams | None = None,
+    target: Any = DEFAULT_TARGET,
+    tau_max: float = 100.0,
+    effort_weight: float = 1e-3,
+    dt: float = 0.05,
+    substeps: int = 5,
+    x0_spread: Any = 0.0,
+) -> PlantEnv:
     """Env of the AUV regulating to ``target`` (control period ``dt`` s, RK4 at ``dt/substeps``)."""
     target = jnp.asarray(target, float)
     if target.shape != (6,):
         raise ValueError(f"target: expected a pose of shape (6,), got {tuple(target.shape)}")
     r = jnp.concatenate([target, jnp.zeros(6)])
-    return PlantEnv(Task(plant=auv_plant(params), step_loss=pose_loss(dt, effort_weight, 100.0),
-                         u_low=-tau_max, u_high=tau_max, dt=dt, x0=jnp.zeros(N_STATES), x0_spread=x0_spread,
-                         reference=Constant(r), substeps=substeps))
+    return PlantEnv(
+        Task(
+            plant=auv_plant(params),
+            step_loss=pose_loss(dt, effort_weight, 100.0),
+            u_low=-tau_max,
+            u_high=tau_max,
+            dt=dt,
+            x0=jnp.zeros(N_STATES),
+            x0_spread=x0_spread,
+            reference=Constant(r),
+            substeps=substeps,
+        )
+    )

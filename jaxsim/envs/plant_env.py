@@ -137,8 +137,14 @@ class PlantEnv(Env):
         x = x0 + spread * jax.random.uniform(rng, x0.shape, x0.dtype, -1.0, 1.0)
         k = jnp.asarray(0, jnp.int32)
         zero = jnp.zeros((), x.dtype)
-        return State(pipeline_state=PlantState(x, k), obs=self._observation(x, k), reward=zero, done=zero,
-                     metrics={"loss": zero}, info={})
+        return State(
+            pipeline_state=PlantState(x, k),
+            obs=self._observation(x, k),
+            reward=zero,
+            done=zero,
+            metrics={"loss": zero},
+            info={},
+        )
 
     def step(self, state: State, action: jax.Array) -> State:
         task = self.task
@@ -152,22 +158,44 @@ class PlantEnv(Env):
             loss = task.tick_loss(tick, task.dt)
         else:
             loss = task.step_loss(t, r, y, u)
-        x_next = hold_input(task.plant, x, u, t, jnp.asarray(task.dt / task.substeps, x.dtype),
-                            int(task.substeps), task.solver, task.disturbance, task.actuate)
+        x_next = hold_input(
+            task.plant,
+            x,
+            u,
+            t,
+            jnp.asarray(task.dt / task.substeps, x.dtype),
+            int(task.substeps),
+            task.solver,
+            task.disturbance,
+            task.actuate,
+        )
         failed = ~jnp.all(jnp.isfinite(x_next))
         if task.terminate is not None:
             failed = failed | task.terminate(x_next)
         done = jnp.maximum(state.done, failed.astype(state.done.dtype))
         k_next = k + 1
         obs = self._observation(x_next, k_next)
-        return state.replace(pipeline_state=PlantState(x_next, k_next), obs=jnp.where(failed, 0.0, obs),
-                             reward=-loss.astype(state.reward.dtype), done=done,
-                             metrics={**state.metrics, "loss": loss.astype(state.reward.dtype)})
+        return state.replace(
+            pipeline_state=PlantState(x_next, k_next),
+            obs=jnp.where(failed, 0.0, obs),
+            reward=-loss.astype(state.reward.dtype),
+            done=done,
+            metrics={**state.metrics, "loss": loss.astype(state.reward.dtype)},
+        )
 
     @classmethod
-    def from_problem(cls, problem: Any, params: Any = None, draw: dict[str, Any] | None = None, *,
-                     u_low: Any = -1.0, u_high: Any = 1.0, x0_spread: Any = 0.0, observe: Observe | None = None,
-                     terminate: Callable[[jax.Array], jax.Array] | None = None) -> "PlantEnv":
+    def from_problem(
+        cls,
+        problem: Any,
+        params: Any = None,
+        draw: dict[str, Any] | None = None,
+        *,
+        u_low: Any = -1.0,
+        u_high: Any = 1.0,
+        x0_spread: Any = 0.0,
+        observe: Observe | None = None,
+        terminate: Callable[[jax.Array], jax.Array] | None = None,
+    ) -> "PlantEnv":
         """The env of a :class:`~jaxsim.problem.Problem`'s scenario: the policy replaces its controller.
 
         ``build(params, draw)`` (default ``space.init`` and the nominal draw) gives the plant,
@@ -181,16 +209,31 @@ class PlantEnv(Env):
         if objective is None:
             raise ValueError("problem: needs an objective of running costs (a from_loss problem has none)")
         if objective.rate is None:
-            raise ValueError("problem: its objective is not additive (a term has no rate, e.g. a soft overshoot); "
-                             "an env reward needs the increment of one tick")
+            raise ValueError(
+                "problem: its objective is not additive (a term has no rate, e.g. a soft overshoot); "
+                "an env reward needs the increment of one tick"
+            )
         sc = problem.scenario(problem.space.init if params is None else params, draw)
         timing = sc.timing
         _, substeps, _ = timing.resolve(None)
         loop = sc.loop
-        task = Task(plant=loop.plant, step_loss=None, u_low=u_low, u_high=u_high, dt=timing.ts,
-                    x0=np.asarray(sc.x0, float), x0_spread=x0_spread, reference=loop.reference, observe=observe,
-                    substeps=substeps, solver=sc.solver, terminate=terminate, tick_loss=objective.rate,
-                    disturbance=loop.disturbance, actuate=loop.actuate)
+        task = Task(
+            plant=loop.plant,
+            step_loss=None,
+            u_low=u_low,
+            u_high=u_high,
+            dt=timing.ts,
+            x0=np.asarray(sc.x0, float),
+            x0_spread=x0_spread,
+            reference=loop.reference,
+            observe=observe,
+            substeps=substeps,
+            solver=sc.solver,
+            terminate=terminate,
+            tick_loss=objective.rate,
+            disturbance=loop.disturbance,
+            actuate=loop.actuate,
+        )
         return cls(task)
 
     @property

@@ -28,17 +28,38 @@ def itae_step(dt: float):
 
 
 def _task(plant, amplitude: float, u_max: float, dt: float, substeps: int, x0_spread: Any) -> Task:
-    return Task(plant=plant, step_loss=itae_step(dt), u_low=-u_max, u_high=u_max, dt=dt,
-                x0=jnp.zeros(2), x0_spread=x0_spread, reference=Step(amplitude), substeps=substeps)
+    return Task(
+        plant=plant,
+        step_loss=itae_step(dt),
+        u_low=-u_max,
+        u_high=u_max,
+        dt=dt,
+        x0=jnp.zeros(2),
+        x0_spread=x0_spread,
+        reference=Step(amplitude),
+        substeps=substeps,
+    )
 
 
-def static_second_order_env(params: StaticParams | None = None, amplitude: float = 1.0, u_max: float = 10.0,
-                            dt: float = 0.01, substeps: int = 1, x0_spread: Any = 0.0) -> PlantEnv:
+def static_second_order_env(
+    params: StaticParams | None = None,
+    amplitude: float = 1.0,
+    u_max: float = 10.0,
+    dt: float = 0.01,
+    substeps: int = 1,
+    x0_spread: Any = 0.0,
+) -> PlantEnv:
     """Env of ``K/((T1 s + 1)(T2 s + 1))`` (paper defaults ``K = 2, T1 = 0.1, T2 = 0.5``)."""
     return PlantEnv(_task(static_plant(params), amplitude, u_max, dt, substeps, x0_spread))
 
 
-def astatic_second_order_env(params: AstaticParams | None = None, amplitude: float = 1.0, u_max: float = 10.0,
-                             dt: float = 0.01, substeps: int = 1, x0_spread: Any = 0.0) -> PlantEnv:
+def astatic_second_order_env(
+    params: AstaticParams | None = None,
+    amplitude: float = 1.0,
+    u_max: float = 10.0,
+    dt: float = 0.01,
+    substeps: int = 1,
+    x0_spread: Any = 0.0,
+) -> PlantEnv:
     """Env of ``K/(s (T s + 1))`` (paper defaults ``K = 2, T = 0.1``)."""
     return PlantEnv(_task(astatic_plant(params), amplitude, u_max, dt, substeps, x0_spread))

@@ -40,8 +40,18 @@ def trms_task(problem: Any = None, exact_friction: bool = False, x0_spread: Any 
 
     timing = problem.timing  # the study's own periods, so env steps are the study's ticks
     _, substeps, _ = timing.resolve(None)
-    return Task(plant=plant, step_loss=step_loss, u_low=-u_max, u_high=u_max, dt=timing.ts, substeps=substeps,
-                x0=x_eq, x0_spread=x0_spread, reference=problem.reference, observe=observe)
+    return Task(
+        plant=plant,
+        step_loss=step_loss,
+        u_low=-u_max,
+        u_high=u_max,
+        dt=timing.ts,
+        substeps=substeps,
+        x0=x_eq,
+        x0_spread=x0_spread,
+        reference=problem.reference,
+        observe=observe,
+    )
 
 
 def trms_env(problem: Any = None, exact_friction: bool = False, x0_spread: Any = 0.0) -> PlantEnv:

@@ -123,7 +123,33 @@ from jaxsim.estimation.ukf import (
     unscented_transform,
 )
 
-__all__ = [name for name in dir() if not name.startswith("_") and name not in {
-    "adapters", "allan", "alpha_beta", "cubature", "ekf", "filtering", "gating", "imm", "kalman",
-    "kalman_bucy", "lgssm", "linalg", "shared_gain", "mmae", "nonlinear", "observers", "parallel", "particle", "smoothers",
-    "steady_state", "types", "ukf"}]
+__all__ = [
+    name
+    for name in dir()
+    if not name.startswith("_")
+    and name
+    not in {
+        "adapters",
+        "allan",
+        "alpha_beta",
+        "cubature",
+        "ekf",
+        "filtering",
+        "gating",
+        "imm",
+        "kalman",
+        "kalman_bucy",
+        "lgssm",
+        "linalg",
+        "shared_gain",
+        "mmae",
+        "nonlinear",
+        "observers",
+        "parallel",
+        "particle",
+        "smoothers",
+        "steady_state",
+        "types",
+        "ukf",
+    }
+]

@@ -70,8 +70,7 @@ def _read_output(p: FilterEstimatorParams, state: GaussianState) -> jax.Array:
     return p.member.observe(p.member.params, state.mean)
 
 
-def filter_estimator(member: FilterMember, m0: Any, P0: Any, *, read: str = "mean",
-                     name: str = "filter") -> Estimator:
+def filter_estimator(member: FilterMember, m0: Any, P0: Any, *, read: str = "mean", name: str = "filter") -> Estimator:
     """Any :class:`~jaxsim.estimation.filtering.FilterMember` as a closed-loop :class:`Estimator`
     starting from ``N(m0 (n,), P0 (n, n))``; ``read`` ``"mean"`` (``(n,)``) or ``"output"``
     (``member.observe`` of the mean, ``(p,)``; the member must define ``observe``).  Every
@@ -119,6 +118,7 @@ def ukf_estimator(
 
 # Luenberger observer (current form) ---------------------------------------------------------
 
+
 @pytree_dataclass
 class LuenbergerParams:
     """``A (n, n)``, ``B (n, m)``, ``C (p, n)``, current-form gain ``L (n, p)``, initial ``x0 (n,)``."""
@@ -156,10 +156,16 @@ def luenberger_estimator(A: Any, B: Any, C: Any, L: Any, x0: Any, *, read: str =
     _check_read(read)
     p = LuenbergerParams(*(jnp.asarray(v) for v in (A, B, C, L, x0)))
     n = p.A.shape[0]
-    if p.A.shape != (n, n) or p.B.shape[0] != n or p.C.shape[1] != n or p.L.shape != (n, p.C.shape[0]) \
-            or p.x0.shape != (n,):
+    if (
+        p.A.shape != (n, n)
+        or p.B.shape[0] != n
+        or p.C.shape[1] != n
+        or p.L.shape != (n, p.C.shape[0])
+        or p.x0.shape != (n,)
+    ):
         raise ValueError(
             f"A, B, C, L, x0: inconsistent shapes {p.A.shape}, {p.B.shape}, {p.C.shape}, {p.L.shape}, {p.x0.shape}"
         )
-    return Estimator(p, _lu_init, _lu_predict, _lu_update,
-                     _lu_read_mean if read == "mean" else _lu_read_output, name="luenberger")
+    return Estimator(
+        p, _lu_init, _lu_predict, _lu_update, _lu_read_mean if read == "mean" else _lu_read_output, name="luenberger"
+    )

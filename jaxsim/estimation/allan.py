@@ -45,9 +45,7 @@ def cluster_sizes(n_samples: int, per_decade: int = 10, max_fraction: float = 0.
     return tuple(int(m) for m in grid if 1 <= m <= top)
 
 
-def allan_variance(
-    y: Any, dt: float, m: Sequence[int] | None = None, *, overlapping: bool = True
-) -> AllanResult:
+def allan_variance(y: Any, dt: float, m: Sequence[int] | None = None, *, overlapping: bool = True) -> AllanResult:
     """Allan variance of ``y (N,)`` (real) sampled every ``dt`` (s) for cluster sizes ``m`` (positive
     integers; default log-spaced).
 
@@ -78,7 +76,7 @@ def _avar(y: jax.Array, sizes: tuple[int, ...], overlapping: bool) -> jax.Array:
     avar = []
     for k in sizes:
         if overlapping:
-            d = (theta[2 * k:] - 2.0 * theta[k:-k] + theta[: n + 1 - 2 * k]) / k
+            d = (theta[2 * k :] - 2.0 * theta[k:-k] + theta[: n + 1 - 2 * k]) / k
         else:
             means = (theta[k::k] - theta[:-k:k][: n // k]) / k
             d = jnp.diff(means[: n // k])
@@ -95,5 +93,3 @@ def random_walk_avar(tau: Any, k2: Any, dt: Any) -> jax.Array:
 def white_noise_avar(tau: Any, sigma2: Any, dt: Any) -> jax.Array:
     """White noise of per-sample variance ``σ²``: ``σ² dt/τ`` (= ``σ²/m``)."""
     return sigma2 * dt / jnp.asarray(tau)
-
-

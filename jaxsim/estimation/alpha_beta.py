@@ -138,5 +138,5 @@ def window_bank(last: Any, dt: Any) -> jax.Array:
         raise ValueError(f"last: needs at least 2 samples, got {big_j}")
     rows = []
     for j in range(2, big_j + 1):
-        rows.append(jnp.einsum("kw,wd->kd", poly_window_weights(j, 1, dt), z[big_j - j:]))
+        rows.append(jnp.einsum("kw,wd->kd", poly_window_weights(j, 1, dt), z[big_j - j :]))
     return jnp.stack(rows)

@@ -34,7 +34,12 @@ class CubaturePoints:
 
 
 def cubature_kalman_filter(
-    model: NonlinearSSM, y: Any, u: Any = None, *, mask: Any = None, missing: str = "error",
+    model: NonlinearSSM,
+    y: Any,
+    u: Any = None,
+    *,
+    mask: Any = None,
+    missing: str = "error",
     gate: float | None = None,
 ) -> FilterResult:
     """Scanned cubature Kalman filter (arguments as :func:`~jaxsim.estimation.ukf.unscented_kalman_filter`)."""

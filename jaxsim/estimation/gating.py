@@ -67,5 +67,4 @@ def fraction_inside(stat: jax.Array, bounds: tuple[float, float]) -> jax.Array:
     return jnp.mean((stat >= lo) & (stat <= hi))
 
 
-__all__ = ["chi2_threshold", "chi2_bounds", "mahalanobis_squared", "nis", "nees", "chi2_gate",
-           "fraction_inside"]
+__all__ = ["chi2_threshold", "chi2_bounds", "mahalanobis_squared", "nis", "nees", "chi2_gate", "fraction_inside"]

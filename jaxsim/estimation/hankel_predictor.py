@@ -38,7 +38,8 @@ def validate_sizes(window: int, nu: int) -> None:
     if window < nu:
         raise ValueError(
             f"window: must be at least the observability index nu={nu} (the Hankel matrix needs as many "
-            f"columns as the system order it must reveal), got {window}")
+            f"columns as the system order it must reveal), got {window}"
+        )
 
 
 def block_hankel(ys: jax.Array, rows: int, cols: int) -> jax.Array:
@@ -51,8 +52,9 @@ def block_hankel(ys: jax.Array, rows: int, cols: int) -> jax.Array:
     return jnp.transpose(blocks, (0, 2, 1)).reshape(rows * ys.shape[1], cols)
 
 
-def predict_next(history: jax.Array, window: int = 15, nu: int = 4, rank_tol: float = 1e-10,
-                 rank: int | None = None) -> jax.Array:
+def predict_next(
+    history: jax.Array, window: int = 15, nu: int = 4, rank_tol: float = 1e-10, rank: int | None = None
+) -> jax.Array:
     """Predict the next output from ``history`` (``window + nu + 1``, p): samples ``y_{i−h−ν} … y_i``.
 
     Returns ``ŷ_{i+1}`` of shape ``(p,)``.  Jittable; ``window``, ``nu`` and ``rank`` are static.
@@ -67,14 +69,15 @@ def predict_next(history: jax.Array, window: int = 15, nu: int = 4, rank_tol: fl
         null = jnp.arange(h + 1) >= rank
     R = vt.T * null[None, :]  # (h+1, h+1), masked columns span the right null space
     p = history.shape[1]
-    known = Y[nu * p:, 1:]  # last block row shifted: y_{i−h+1} … y_i, shape (p, h)
+    known = Y[nu * p :, 1:]  # last block row shifted: y_{i−h+1} … y_i, shape (p, h)
     k = known @ R[:h, :]  # (p, h+1)
     r = R[h, :]
     return -(k @ r) / (r @ r)
 
 
-def predict_series(ys: jax.Array, window: int = 15, nu: int = 4, rank_tol: float = 1e-10,
-                   rank: int | None = None) -> jax.Array:
+def predict_series(
+    ys: jax.Array, window: int = 15, nu: int = 4, rank_tol: float = 1e-10, rank: int | None = None
+) -> jax.Array:
     """One-step predictions over a series ``ys`` (N, p): row ``k`` predicts ``ys[k]`` from the
     ``window + nu + 1`` samples before it; the first ``window + nu + 1`` rows are NaN."""
     validate_sizes(window, nu)

@@ -34,8 +34,21 @@ from jaxsim.estimation.types import GaussianState
 from jaxsim.estimation.ukf import ukf_member
 from jaxsim.precision import to_common_float
 
-__all__ = ["IMM", "FilterMember", "IMMResult", "IMMState", "ekf_member", "imm", "imm_estimate", "imm_filter",
-           "imm_init", "imm_predict", "imm_update", "linear_member", "ukf_member"]
+__all__ = [
+    "IMM",
+    "FilterMember",
+    "IMMResult",
+    "IMMState",
+    "ekf_member",
+    "imm",
+    "imm_estimate",
+    "imm_filter",
+    "imm_init",
+    "imm_predict",
+    "imm_update",
+    "linear_member",
+    "ukf_member",
+]
 
 
 @pytree_dataclass
@@ -91,8 +104,9 @@ def _check_state(state: IMMState, n_members: int | None = None) -> None:
     means, covs, probs = state
     shapes = tuple(tuple(np.shape(a)) for a in state)
     if len(shapes[0]) != 2 or shapes[1] != shapes[0] + shapes[0][-1:] or shapes[2] != shapes[0][:1]:
-        raise ValueError(f"means, covs, probs: expected shapes (M, n), (M, n, n), (M,), got "
-                         f"{shapes[0]}, {shapes[1]}, {shapes[2]}")
+        raise ValueError(
+            f"means, covs, probs: expected shapes (M, n), (M, n, n), (M,), got {shapes[0]}, {shapes[1]}, {shapes[2]}"
+        )
     if n_members is not None and shapes[2] != (n_members,):
         raise ValueError(f"probs: expected shape ({n_members},) for {n_members} members, got {shapes[2]}")
     check_finite("means", means)
@@ -112,8 +126,10 @@ def imm_init(means: Any, covs: Any, probs: Any) -> IMMState:
 def _check_measurement(model: IMM, y: jax.Array) -> None:
     p = _output_dim(model)
     if p is not None and np.shape(y) != (p,):
-        raise ValueError(f"y: expected {p} components per measurement (the members' output dimension), "
-                         f"got shape {tuple(np.shape(y))}")
+        raise ValueError(
+            f"y: expected {p} components per measurement (the members' output dimension), "
+            f"got shape {tuple(np.shape(y))}"
+        )
 
 
 def _mix(state: IMMState, pi: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
@@ -128,8 +144,9 @@ def _mix(state: IMMState, pi: jax.Array) -> tuple[jax.Array, jax.Array, jax.Arra
 def imm_predict(model: IMM, state: IMMState, u: Any = None) -> IMMState:
     """Mix the member beliefs, predict each member, and carry the predicted mode probabilities."""
     mixed_means, mixed_covs, cbar = _mix(state, model.transition)
-    preds = [mem.predict(mem.params, GaussianState(mixed_means[j], mixed_covs[j]), u)
-             for j, mem in enumerate(model.members)]
+    preds = [
+        mem.predict(mem.params, GaussianState(mixed_means[j], mixed_covs[j]), u) for j, mem in enumerate(model.members)
+    ]
     return IMMState(jnp.stack([p.mean for p in preds]), jnp.stack([p.cov for p in preds]), cbar)
 
 
@@ -137,8 +154,10 @@ def imm_update(model: IMM, state: IMMState, y: jax.Array, mask: Any = None) -> t
     """Update every member with ``y (p,)``; returns the new state and ``log p(y | past)``."""
     _check_measurement(model, y)
     m = kalman.full_mask(y.shape[0], mask)
-    outs = [mem.update(mem.params, GaussianState(state.means[j], state.covs[j]), y, m)
-            for j, mem in enumerate(model.members)]
+    outs = [
+        mem.update(mem.params, GaussianState(state.means[j], state.covs[j]), y, m)
+        for j, mem in enumerate(model.members)
+    ]
     ll = jnp.stack([o[1].log_likelihood for o in outs])
     log_joint = jnp.log(state.probs) + ll
     total = jax.scipy.special.logsumexp(log_joint)

@@ -55,9 +55,7 @@ def mask_measurement(
     return res_m, h_m, r_m
 
 
-def innovation_stats(
-    residual: jax.Array, chol_s: jax.Array, mask: jax.Array, s: jax.Array | None = None
-) -> Innovation:
+def innovation_stats(residual: jax.Array, chol_s: jax.Array, mask: jax.Array, s: jax.Array | None = None) -> Innovation:
     """NIS and Gaussian log-likelihood of ``residual`` given the Cholesky factor of ``S``."""
     z = linalg.solve_lower(chol_s, residual)
     nis = jnp.dot(z, z)

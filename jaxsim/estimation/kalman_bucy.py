@@ -62,8 +62,16 @@ def continuous_discrete_predict(
 
 
 def kalman_bucy_derivative(
-    state: GaussianState, y: jax.Array, A: jax.Array, C: jax.Array, Qc: jax.Array, Rc: jax.Array,
-    *, B: jax.Array | None = None, u: jax.Array | None = None, G: jax.Array | None = None,
+    state: GaussianState,
+    y: jax.Array,
+    A: jax.Array,
+    C: jax.Array,
+    Qc: jax.Array,
+    Rc: jax.Array,
+    *,
+    B: jax.Array | None = None,
+    u: jax.Array | None = None,
+    G: jax.Array | None = None,
 ) -> GaussianState:
     """``(ṁ, Ṗ)`` of the Kalman–Bucy filter for the measured signal ``y (p,)``."""
     m, P = state
@@ -76,9 +84,19 @@ def kalman_bucy_derivative(
 
 
 def kalman_bucy_step(
-    state: GaussianState, y: jax.Array, A: jax.Array, C: jax.Array, Qc: jax.Array, Rc: jax.Array,
-    dt: Any, *, B: jax.Array | None = None, u: jax.Array | None = None, G: jax.Array | None = None,
-    substeps: int = 1, solver: Solver = RK4,
+    state: GaussianState,
+    y: jax.Array,
+    A: jax.Array,
+    C: jax.Array,
+    Qc: jax.Array,
+    Rc: jax.Array,
+    dt: Any,
+    *,
+    B: jax.Array | None = None,
+    u: jax.Array | None = None,
+    G: jax.Array | None = None,
+    substeps: int = 1,
+    solver: Solver = RK4,
 ) -> GaussianState:
     """Advance the Kalman–Bucy filter by ``dt`` with ``y`` and ``u`` held."""
     n = state.mean.shape[0]
@@ -91,14 +109,16 @@ def kalman_bucy_step(
     return GaussianState(z[:n], symmetrize(z[n:].reshape(n, n)))
 
 
-def steady_state_kalman_bucy(
-    A: Any, C: Any, Qc: Any, Rc: Any, *, G: Any = None
-) -> tuple[jax.Array, jax.Array]:
+def steady_state_kalman_bucy(A: Any, C: Any, Qc: Any, Rc: Any, *, G: Any = None) -> tuple[jax.Array, jax.Array]:
     """Deprecated alias of :func:`jaxsim.control.kalman_gain.kalman_bucy` ``(A, C, Qc, Rc, G)`` — the
     toolkit's one steady-state Kalman–Bucy API — returning ``(P (n, n), K (n, p))`` in this order
     (``kalman_bucy`` returns the named ``KalmanBucyGain(l, p)``).  Checks and errors are
     ``kalman_bucy``'s, naming ``A, C, Qc, Rc``."""
-    warnings.warn("steady_state_kalman_bucy is deprecated; use jaxsim.control.kalman_gain.kalman_bucy(A, C, W, V, G) "
-                  "(it returns KalmanBucyGain(l, p))", DeprecationWarning, stacklevel=2)
+    warnings.warn(
+        "steady_state_kalman_bucy is deprecated; use jaxsim.control.kalman_gain.kalman_bucy(A, C, W, V, G) "
+        "(it returns KalmanBucyGain(l, p))",
+        DeprecationWarning,
+        stacklevel=2,
+    )
     gain = kalman_bucy(A, C, Qc, Rc, G, names=("A", "C", "Qc", "Rc"))
     return gain.p, gain.l

@@ -143,8 +143,15 @@ def _init(params: PredictorParams, y0: jax.Array) -> PredictorState:
     mean = jnp.stack([jnp.zeros(3), ins[:3]], axis=1)  # [v, X] per axis: the paper's χ(0) = 0
     cov = jnp.broadcast_to(jnp.diag(p0), (3, 2, 2))
     fit = jnp.stack([ins[:3], jnp.zeros(3), jnp.zeros(3)])
-    return PredictorState(jnp.zeros(()), ins, jnp.tile(ins[:3], (size, 1)), fit, jnp.zeros(()),
-                          GaussianState(mean, cov), jnp.zeros((), dtype=jnp.int32))
+    return PredictorState(
+        jnp.zeros(()),
+        ins,
+        jnp.tile(ins[:3], (size, 1)),
+        fit,
+        jnp.zeros(()),
+        GaussianState(mean, cov),
+        jnp.zeros((), dtype=jnp.int32),
+    )
 
 
 def _on_frame(params: PredictorParams, s: PredictorState, z_fr: jax.Array) -> PredictorState:
@@ -154,7 +161,8 @@ def _on_frame(params: PredictorParams, s: PredictorState, z_fr: jax.Array) -> Pr
     fit = fit_window(params.weights, window)
     z = jnp.stack([fit[1], fit[0]], axis=1)  # (3, 2): [v̂, X̂] per axis
     kf = jax.vmap(lambda m, c, zz: kalman.update(GaussianState(m, c), zz, jnp.eye(2), params.meas_cov)[0])(
-        s.kf.mean, s.kf.cov, z)
+        s.kf.mean, s.kf.cov, z
+    )
     return s._replace(window=window, fit=fit, t_frame=s.t, kf=kf, frames=s.frames + 1)
 
 
@@ -168,8 +176,7 @@ def _update(params: PredictorParams, s: PredictorState, y: jax.Array) -> Predict
 
 def _predict(params: PredictorParams, s: PredictorState, u: jax.Array, dt: Any) -> PredictorState:
     F, B, Q = double_integrator(dt, params.accel_psd)
-    kf = jax.vmap(lambda m, c, a: kalman.predict(GaussianState(m, c), F, Q, B, a[None]))(
-        s.kf.mean, s.kf.cov, s.fit[2])
+    kf = jax.vmap(lambda m, c, a: kalman.predict(GaussianState(m, c), F, Q, B, a[None]))(s.kf.mean, s.kf.cov, s.fit[2])
     return s._replace(t=s.t + dt, kf=kf)
 
 
@@ -219,6 +226,12 @@ def leader_predictor(
     check_finite("t_start", t_start)
     weights = poly_window_weights(int(window), int(degree), camera_period)[:3]
     meas_cov = fit_covariance(weights, jnp.asarray(meas_std, dtype=float))  # differentiable in meas_std
-    params = PredictorParams(weights, meas_cov, jnp.asarray(accel_psd, dtype=float),
-                             jnp.asarray(p0, dtype=float), jnp.asarray(t_start, dtype=float), mode)
+    params = PredictorParams(
+        weights,
+        meas_cov,
+        jnp.asarray(accel_psd, dtype=float),
+        jnp.asarray(p0, dtype=float),
+        jnp.asarray(t_start, dtype=float),
+        mode,
+    )
     return Estimator(params, _init, _predict, _update, _read, name=f"leader_predictor_{mode}")

@@ -71,8 +71,13 @@ _BASE_NDIM = {"F": 2, "Q": 2, "H": 2, "R": 2, "B": 2}
 def lgssm(F: Any, Q: Any, H: Any, R: Any, m0: Any, P0: Any, B: Any = None) -> LinearGaussianSSM:
     """Build and validate a :class:`LinearGaussianSSM` (arrays converted with ``jnp.asarray``)."""
     model = LinearGaussianSSM(
-        jnp.asarray(F), jnp.asarray(Q), jnp.asarray(H), jnp.asarray(R), jnp.asarray(m0),
-        jnp.asarray(P0), None if B is None else jnp.asarray(B),
+        jnp.asarray(F),
+        jnp.asarray(Q),
+        jnp.asarray(H),
+        jnp.asarray(R),
+        jnp.asarray(m0),
+        jnp.asarray(P0),
+        None if B is None else jnp.asarray(B),
     )
     validate_model(model)
     return model
@@ -117,9 +122,7 @@ def validate_model(model: LinearGaussianSSM, n_steps: int | None = None) -> None
             check_finite(name, value)
 
 
-def prepare_measurements(
-    y: Any, p: int, mask: Any = None, missing: str = "error"
-) -> tuple[jax.Array, jax.Array]:
+def prepare_measurements(y: Any, p: int, mask: Any = None, missing: str = "error") -> tuple[jax.Array, jax.Array]:
     """Validate ``y (T, p)`` and build the ``(T, p)`` availability mask; NaN → 0 where masked."""
     if missing not in MISSING_POLICIES:
         raise ValueError(f"missing: expected one of {MISSING_POLICIES}, got {missing!r}")

@@ -28,8 +28,7 @@ def cholesky(a: jax.Array) -> jax.Array:
             s = a[..., i, j] - sum((low[i][m] * low[j][m] for m in range(j)), jnp.zeros_like(a[..., i, j]))
             low[i][j] = s / low[j][j]
     zero = jnp.zeros_like(a[..., 0, 0])
-    return jnp.stack([jnp.stack([low[i][j] if j <= i else zero for j in range(k)], axis=-1)
-                      for i in range(k)], axis=-2)
+    return jnp.stack([jnp.stack([low[i][j] if j <= i else zero for j in range(k)], axis=-1) for i in range(k)], axis=-2)
 
 
 def solve_lower(low: jax.Array, b: jax.Array) -> jax.Array:

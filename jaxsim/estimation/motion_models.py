@@ -52,8 +52,7 @@ def ct_transition(dt: Any, x: jax.Array) -> jax.Array:
     s = dt * jnp.sinc(a / jnp.pi)  # sin(ω dt)/ω
     c = 0.5 * a * dt * jnp.sinc(a / (2.0 * jnp.pi)) ** 2  # (1 − cos(ω dt))/ω
     cos_a, sin_a = jnp.cos(a), jnp.sin(a)
-    return jnp.stack([px + s * vx - c * vy, py + c * vx + s * vy, cos_a * vx - sin_a * vy,
-                      sin_a * vx + cos_a * vy, w])
+    return jnp.stack([px + s * vx - c * vy, py + c * vx + s * vy, cos_a * vx - sin_a * vy, sin_a * vx + cos_a * vy, w])
 
 
 def _ct_f(params: Any, x: jax.Array, u: Any) -> jax.Array:

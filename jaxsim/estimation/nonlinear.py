@@ -50,8 +50,9 @@ def nonlinear_ssm(
     transition: Callable, observation: Callable, Q: Any, R: Any, m0: Any, P0: Any, params: Any = None
 ) -> NonlinearSSM:
     """Build and validate a :class:`NonlinearSSM`."""
-    model = NonlinearSSM(params, jnp.asarray(Q), jnp.asarray(R), jnp.asarray(m0), jnp.asarray(P0),
-                         transition, observation)
+    model = NonlinearSSM(
+        params, jnp.asarray(Q), jnp.asarray(R), jnp.asarray(m0), jnp.asarray(P0), transition, observation
+    )
     validate_nonlinear(model)
     return model
 

@@ -49,8 +49,11 @@ def _conjugate_partners(poles: np.ndarray, tol: float = 1e-9) -> list[int]:
     for i, p in enumerate(poles):
         if abs(p.imag) <= tol * max(1.0, abs(p)) or i in used:
             continue
-        cands = [j for j in range(len(poles)) if j != i and j not in used
-                 and abs(poles[j] - np.conj(p)) <= 1e-9 * max(1.0, abs(p))]
+        cands = [
+            j
+            for j in range(len(poles))
+            if j != i and j not in used and abs(poles[j] - np.conj(p)) <= 1e-9 * max(1.0, abs(p))
+        ]
         if not cands:
             raise ValueError(f"poles: complex pole {p} has no conjugate partner")
         partner[i], partner[cands[0]] = cands[0], i
@@ -150,8 +153,13 @@ def current_observer_gain(A: Any, C: Any, poles: Any) -> jax.Array:
 
 
 def luenberger_step(
-    x_hat: jax.Array, y: jax.Array, u: jax.Array | None, A: jax.Array, B: jax.Array | None,
-    C: jax.Array, L: jax.Array,
+    x_hat: jax.Array,
+    y: jax.Array,
+    u: jax.Array | None,
+    A: jax.Array,
+    B: jax.Array | None,
+    C: jax.Array,
+    L: jax.Array,
 ) -> jax.Array:
     """Discrete prediction-form observer ``x̂_{k+1} = A x̂ + B u + L (y − C x̂)``."""
     nxt = A @ x_hat + L @ (y - C @ x_hat)
@@ -159,8 +167,13 @@ def luenberger_step(
 
 
 def luenberger_derivative(
-    x_hat: jax.Array, y: jax.Array, u: jax.Array | None, A: jax.Array, B: jax.Array | None,
-    C: jax.Array, L: jax.Array,
+    x_hat: jax.Array,
+    y: jax.Array,
+    u: jax.Array | None,
+    A: jax.Array,
+    B: jax.Array | None,
+    C: jax.Array,
+    L: jax.Array,
 ) -> jax.Array:
     """Continuous observer ``dx̂/dt = A x̂ + B u + L (y − C x̂)``."""
     return luenberger_step(x_hat, y, u, A, B, C, L)
@@ -178,9 +191,7 @@ def switching(e: jax.Array, mode: str = "sign", epsilon: Any = 1e-3) -> jax.Arra
     return get_switch("ratio" if mode == "fraction" else mode)(e, epsilon)
 
 
-def sliding_mode_injection(
-    e_y: jax.Array, rho: Any, mode: str = "sign", epsilon: Any = 1e-3
-) -> jax.Array:
+def sliding_mode_injection(e_y: jax.Array, rho: Any, mode: str = "sign", epsilon: Any = 1e-3) -> jax.Array:
     """``ν = ρ · v(e_y)``: the discontinuous (or smoothed) output-error injection."""
     return jnp.asarray(rho) * switching(e_y, mode, epsilon)
 

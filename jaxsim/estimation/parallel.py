@@ -136,9 +136,16 @@ def _parallel_filter(model: LinearGaussianSSM, y: jax.Array, m: jax.Array, u: ja
 
     innov = jax.vmap(innovation)(pred_means, pred_covs, y, m, H, R)
     return FilterResult(
-        means=means, covs=covs, predicted_means=pred_means, predicted_covs=pred_covs,
-        log_likelihood=jnp.sum(innov.log_likelihood), log_likelihoods=innov.log_likelihood,
-        innovations=innov.residual, innovation_covs=innov.cov, nis=innov.nis, dof=innov.dof,
+        means=means,
+        covs=covs,
+        predicted_means=pred_means,
+        predicted_covs=pred_covs,
+        log_likelihood=jnp.sum(innov.log_likelihood),
+        log_likelihoods=innov.log_likelihood,
+        innovations=innov.residual,
+        innovation_covs=innov.cov,
+        nis=innov.nis,
+        dof=innov.dof,
         accepted=jnp.any(m, axis=1),
     )
 

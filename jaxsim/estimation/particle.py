@@ -93,8 +93,11 @@ def multinomial_resample(key: jax.Array, weights: jax.Array) -> jax.Array:
     return _inverse_cdf(weights, jnp.sort(jax.random.uniform(key, (n,), dtype=weights.dtype)))
 
 
-_RESAMPLERS = {"systematic": systematic_resample, "stratified": stratified_resample,
-               "multinomial": multinomial_resample}
+_RESAMPLERS = {
+    "systematic": systematic_resample,
+    "stratified": stratified_resample,
+    "multinomial": multinomial_resample,
+}
 
 
 def resample(key: jax.Array, log_weights: jax.Array, method: str = "systematic") -> jax.Array:
@@ -179,8 +182,7 @@ def bootstrap_filter(
     (y, u), params = to_common_float((y, None if u is None else jnp.asarray(u)), model.params)
     model = replace(model, params=params)
     y, m = prepare_measurements(y, y.shape[1], None if mask is None else jnp.asarray(mask), missing)
-    return _run_particle_filter(model, key, y, jnp.all(m, axis=1), u, n_particles, resampling,
-                                float(ess_threshold))
+    return _run_particle_filter(model, key, y, jnp.all(m, axis=1), u, n_particles, resampling, float(ess_threshold))
 
 
 @functools.partial(jax.jit, static_argnames=("n_particles", "resampling", "ess_threshold"))
@@ -191,8 +193,7 @@ def _run_particle_filter(model, key, y, available, u, n_particles, resampling, e
 
     def step(s, inp):
         k, y_t, a_t, u_t = inp
-        return pf_step(model, k, s, y_t, u_t, available=a_t, resampling=resampling,
-                       ess_threshold=ess_threshold)
+        return pf_step(model, k, s, y_t, u_t, available=a_t, resampling=resampling, ess_threshold=ess_threshold)
 
     final, (means, covs, ess, did, ll) = jax.lax.scan(step, state, (keys, y, available, u))
     return ParticleResult(means, covs, ess, did, ll, jnp.sum(ll), final)
@@ -227,8 +228,15 @@ def particle_model_from_lgssm(model: LinearGaussianSSM) -> ParticleModel:
     validate_model(model)
     check_covariance("R", model.R, definite=True, purpose="a particle filter's likelihood")
     (model,), _ = to_common_float((model,))
-    params = {"m0": model.m0, "L0": cholesky_psd(model.P0), "F": model.F, "LQ": cholesky_psd(model.Q),
-              "H": model.H, "R": model.R, "logdet_R": jnp.linalg.slogdet(model.R)[1]}
+    params = {
+        "m0": model.m0,
+        "L0": cholesky_psd(model.P0),
+        "F": model.F,
+        "LQ": cholesky_psd(model.Q),
+        "H": model.H,
+        "R": model.R,
+        "logdet_R": jnp.linalg.slogdet(model.R)[1],
+    }
     if model.B is not None:
         params["B"] = model.B
     return ParticleModel(params, _gaussian_initial, _gaussian_transition, _gaussian_loglik)

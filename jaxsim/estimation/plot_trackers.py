@@ -27,8 +27,9 @@ class Track(NamedTuple):
     predicted: jax.Array
 
 
-def one_plot_start(z0: jax.Array, R: jax.Array, velocity_prior_std: float,
-                   extra_std: tuple[float, ...] = ()) -> tuple[jax.Array, jax.Array]:
+def one_plot_start(
+    z0: jax.Array, R: jax.Array, velocity_prior_std: float, extra_std: tuple[float, ...] = ()
+) -> tuple[jax.Array, jax.Array]:
     """Mean ``(4 + k,)`` and covariance of the belief after the first plot ``z0 (2,)``: position
     ``z0`` with covariance ``R (2, 2)``, zero velocity (and the ``k`` states of ``extra_std``)
     with the given prior standard deviations."""
@@ -52,8 +53,18 @@ def kalman_cv_track(z: jax.Array, R: jax.Array, dt: float, q: float, velocity_pr
     return _with_first_plot(z, res.means[:, :2], res.predicted_means[:, :2])
 
 
-def imm_cv_ct_track(z: jax.Array, R: jax.Array, dt: float, *, q_cv: float, q_ct: float, q_turn_rate: float,
-                    switch_prob: float, velocity_prior_std: float, turn_rate_prior_std: float) -> Track:
+def imm_cv_ct_track(
+    z: jax.Array,
+    R: jax.Array,
+    dt: float,
+    *,
+    q_cv: float,
+    q_ct: float,
+    q_turn_rate: float,
+    switch_prob: float,
+    velocity_prior_std: float,
+    turn_rate_prior_std: float,
+) -> Track:
     """CV + coordinated-turn IMM (:func:`~jaxsim.estimation.motion_models.cv_ct_imm`, equal initial
     mode probabilities) from a one-plot start; the prediction is the mixture's."""
     model = cv_ct_imm(dt, q_cv, q_ct, q_turn_rate, R, switch_prob)

@@ -142,14 +142,15 @@ def validate_model(model: ReducedModel) -> None:
     for name, arr in zip(("F1", "F2", "F3", "F4", "D1", "D2"), (F1, F2, F3, F4, D1, D2)):
         check_finite(name, arr)
     if is_concrete(F4) and np.max(np.linalg.eigvals(np.asarray(F4)).real) >= 0:
-        raise ValueError(f"F4: must be Hurwitz (choose Q so that F4 + Q F2 is stable), "
-                         f"eigenvalues {np.linalg.eigvals(np.asarray(F4))}")
+        raise ValueError(
+            f"F4: must be Hurwitz (choose Q so that F4 + Q F2 is stable), "
+            f"eigenvalues {np.linalg.eigvals(np.asarray(F4))}"
+        )
     if is_concrete(D1) and is_concrete(D2) and float(D1) == 0.0 and not np.any(np.asarray(D2)):
         raise ValueError("D1, D2: the fault does not enter the reduced model (both zero)")
 
 
-def sliding_existence(model: ReducedModel, gains: SMOGains, P: Any, W: Any,
-                      bounds: SlidingBounds) -> SlidingMargins:
+def sliding_existence(model: ReducedModel, gains: SMOGains, P: Any, W: Any, bounds: SlidingBounds) -> SlidingMargins:
     """Check that the sliding surface ``e1 = 0`` exists for these gains (see module docstring).
 
     Returns the margins; raises ``ValueError`` naming the gain when the surface is unreachable.
@@ -167,7 +168,8 @@ def sliding_existence(model: ReducedModel, gains: SMOGains, P: Any, W: Any,
     if decay <= 0:
         raise ValueError(
             f"k1: the sliding motion is not stable for these bounds: λmin(W + 2(k1/k3)F2ᵀF2) = {lam:.4g} "
-            f"≤ 2‖P‖N2 + 2(k1/k3)‖F2‖N1 = {lam - decay:.4g} (paper's condition λmin(W) ≥ 2‖P‖N*2)")
+            f"≤ 2‖P‖N2 + 2(k1/k3)‖F2‖N1 = {lam - decay:.4g} (paper's condition λmin(W) ≥ 2‖P‖N*2)"
+        )
     eig = np.linalg.eigvalsh(P)
     r = 2 * (nP * b["M2"] + np.linalg.norm(P @ D2) * b["beta"] + rho * nF2 * (b["M1"] + abs(D1) * b["beta"])) / decay
     delta = float(r * np.sqrt(eig.max() / eig.min()))
@@ -176,7 +178,8 @@ def sliding_existence(model: ReducedModel, gains: SMOGains, P: Any, W: Any,
         raise ValueError(
             f"k3: the sliding surface e1 = 0 is unreachable: k3 = {k3:.4g} must exceed "
             f"(‖F2‖ + N1)·δ + M1 + |D1|·β = {k3_min:.4g}, where δ = {delta:.4g} bounds ‖e2‖ on the surface "
-            f"(raise k3 or k1/k3)")
+            f"(raise k3 or k1/k3)"
+        )
     return SlidingMargins(delta=delta, k3_min=k3_min, decay=float(decay))
 
 
@@ -190,7 +193,7 @@ def reduced_order_smo(
     filter_tau: float = 0.0,
     switch: str = "ratio",
     scheme: str = "implicit_sign",
-    solver: Solver = SemiImplicitEuler(),
+    solver: Solver = SemiImplicitEuler(),  # noqa: B008  (an immutable default)
 ) -> SMOParams:
     """Validated observer parameters.
 
@@ -216,9 +219,16 @@ def reduced_order_smo(
     P = lyapunov_P(F4, W)
     if bounds is not None and is_concrete((gains, bounds)):
         sliding_existence(model, gains, P, W, bounds)
-    return SMOParams(model=model, gains=gains, P=P, width=jnp.asarray(width, float),
-                     filter_tau=jnp.asarray(filter_tau, float), switch=switch, scheme=scheme,
-                     solver=solver)
+    return SMOParams(
+        model=model,
+        gains=gains,
+        P=P,
+        width=jnp.asarray(width, float),
+        filter_tau=jnp.asarray(filter_tau, float),
+        switch=switch,
+        scheme=scheme,
+        solver=solver,
+    )
 
 
 def smo_init(params: SMOParams, y0: jax.Array, z2_0: jax.Array | None = None) -> SMOState:
@@ -230,8 +240,9 @@ def smo_init(params: SMOParams, y0: jax.Array, z2_0: jax.Array | None = None) ->
     return SMOState(z=jnp.concatenate([jnp.reshape(ystar, (1,)), z2]), v=zero, v_eq=zero, y=jnp.asarray(y0))
 
 
-def _step_implicit_sign(p: SMOParams, z: jax.Array, y_prev: jax.Array, t: jax.Array, y: jax.Array,
-                        u: jax.Array, dt: jax.Array) -> tuple[jax.Array, jax.Array]:
+def _step_implicit_sign(
+    p: SMOParams, z: jax.Array, y_prev: jax.Array, t: jax.Array, y: jax.Array, u: jax.Array, dt: jax.Array
+) -> tuple[jax.Array, jax.Array]:
     mdl, g = p.model, p.gains
     F1, F2, F3, F4, _, _ = _blocks(mdl)
     ystar = mdl.reduced_output(mdl.params, y)
@@ -248,8 +259,9 @@ def _step_implicit_sign(p: SMOParams, z: jax.Array, y_prev: jax.Array, t: jax.Ar
     return z_new, v
 
 
-def _step_smooth(p: SMOParams, z: jax.Array, y_prev: jax.Array, t: jax.Array, y: jax.Array,
-                 u: jax.Array, dt: jax.Array) -> tuple[jax.Array, jax.Array]:
+def _step_smooth(
+    p: SMOParams, z: jax.Array, y_prev: jax.Array, t: jax.Array, y: jax.Array, u: jax.Array, dt: jax.Array
+) -> tuple[jax.Array, jax.Array]:
     """One ``solver`` step in output-error coordinates ``ζ = ẑ − (ℓ(t), 0)``.
 
     ``ℓ`` interpolates ``y*`` linearly across the step (and the other outputs likewise), so the
@@ -281,8 +293,9 @@ def _step_smooth(p: SMOParams, z: jax.Array, y_prev: jax.Array, t: jax.Array, y:
     return z_new, SWITCHES[p.switch](-zeta_new[0], p.width)
 
 
-def smo_step(params: SMOParams, state: SMOState, t_next: jax.Array, y_next: jax.Array,
-             u: jax.Array, dt: jax.Array) -> SMOState:
+def smo_step(
+    params: SMOParams, state: SMOState, t_next: jax.Array, y_next: jax.Array, u: jax.Array, dt: jax.Array
+) -> SMOState:
     """Advance from ``t_next − dt`` to ``t_next`` with input ``u`` held and measurement ``y_next``."""
     step = _step_implicit_sign if params.scheme == "implicit_sign" else _step_smooth
     z, v = step(params, state.z, state.y, t_next, y_next, u, dt)
@@ -299,8 +312,7 @@ def fault_estimate(params: SMOParams, v_eq: jax.Array) -> jax.Array:
     return jnp.where(D1 == 0, from_z2, from_z1)
 
 
-def smo_filter(params: SMOParams, ts: jax.Array, ys: jax.Array, us: jax.Array,
-               z2_0: jax.Array | None = None) -> SMORun:
+def smo_filter(params: SMOParams, ts: jax.Array, ys: jax.Array, us: jax.Array, z2_0: jax.Array | None = None) -> SMORun:
     """Run the observer over samples ``ts`` (N,), ``ys`` (N, p), ``us`` (N, m).
 
     ``us[k]`` is the input held over ``[ts[k], ts[k+1])`` (so ``us[-1]`` is unused); row ``k`` of the

@@ -40,8 +40,9 @@ class CovarianceSequence(NamedTuple):
     mask: jax.Array
 
 
-def covariance_sequence(model: LinearGaussianSSM, n_steps: int, *, mask: Any = None,
-                        form: str = "joseph") -> CovarianceSequence:
+def covariance_sequence(
+    model: LinearGaussianSSM, n_steps: int, *, mask: Any = None, form: str = "joseph"
+) -> CovarianceSequence:
     """Run the covariance recursion once for ``n_steps`` steps (availability ``mask (T,)``/``(T, p)``)."""
     p = model.n_outputs
     dummy = jnp.zeros((n_steps, p), dtype=jnp.result_type(model.m0, float))

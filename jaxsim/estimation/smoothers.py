@@ -34,8 +34,7 @@ def rts_backward(filtered: FilterResult, cross: jax.Array) -> SmootherResult:
         ps = kalman.symmetrize(P + g @ (ps_next - P_pred) @ g.T)
         return (ms, ps), (ms, ps, g)
 
-    xs = (filtered.means[:-1], filtered.covs[:-1], filtered.predicted_means[1:],
-          filtered.predicted_covs[1:], cross)
+    xs = (filtered.means[:-1], filtered.covs[:-1], filtered.predicted_means[1:], filtered.predicted_covs[1:], cross)
     last = (filtered.means[-1], filtered.covs[-1])
     _, (ms, ps, gains) = jax.lax.scan(step, last, xs, reverse=True)
     return SmootherResult(
@@ -47,8 +46,14 @@ def rts_backward(filtered: FilterResult, cross: jax.Array) -> SmootherResult:
 
 
 def rts_smoother(
-    model: LinearGaussianSSM, y: Any, u: Any = None, *, mask: Any = None, missing: str = "error",
-    form: str = "joseph", gate: float | None = None,
+    model: LinearGaussianSSM,
+    y: Any,
+    u: Any = None,
+    *,
+    mask: Any = None,
+    missing: str = "error",
+    form: str = "joseph",
+    gate: float | None = None,
 ) -> SmootherResult:
     """Kalman filter + RTS smoother (arguments as :func:`~jaxsim.estimation.lgssm.kalman_filter`)."""
     filtered = kalman_filter(model, y, u, mask=mask, missing=missing, form=form, gate=gate)
@@ -62,8 +67,14 @@ def _inputs(u: Any, t: int) -> Any:
 
 
 def extended_rts_smoother(
-    model: NonlinearSSM, y: Any, u: Any = None, *, mask: Any = None, missing: str = "error",
-    form: str = "joseph", gate: float | None = None,
+    model: NonlinearSSM,
+    y: Any,
+    u: Any = None,
+    *,
+    mask: Any = None,
+    missing: str = "error",
+    form: str = "joseph",
+    gate: float | None = None,
 ) -> SmootherResult:
     """EKF + RTS with Jacobians of ``f`` at the filtered means."""
     filtered = extended_kalman_filter(model, y, u, mask=mask, missing=missing, form=form, gate=gate)
@@ -78,8 +89,14 @@ def extended_rts_smoother(
 
 
 def sigma_point_rts_smoother(
-    model: NonlinearSSM, y: Any, u: Any = None, *, scheme: SigmaPointScheme, mask: Any = None,
-    missing: str = "error", gate: float | None = None,
+    model: NonlinearSSM,
+    y: Any,
+    u: Any = None,
+    *,
+    scheme: SigmaPointScheme,
+    mask: Any = None,
+    missing: str = "error",
+    gate: float | None = None,
 ) -> SmootherResult:
     """Sigma-point filter + RTS with sigma-point cross-covariances (any scheme)."""
     filtered = sigma_point_filter(model, y, u, scheme=scheme, mask=mask, missing=missing, gate=gate)
@@ -93,9 +110,18 @@ def sigma_point_rts_smoother(
 
 
 def unscented_rts_smoother(
-    model: NonlinearSSM, y: Any, u: Any = None, *, alpha: float = 1.0, beta: float = 2.0,
-    kappa: float = 0.0, mask: Any = None, missing: str = "error", gate: float | None = None,
+    model: NonlinearSSM,
+    y: Any,
+    u: Any = None,
+    *,
+    alpha: float = 1.0,
+    beta: float = 2.0,
+    kappa: float = 0.0,
+    mask: Any = None,
+    missing: str = "error",
+    gate: float | None = None,
 ) -> SmootherResult:
     """UKF + unscented RTS smoother with Merwe scaled sigma points."""
-    return sigma_point_rts_smoother(model, y, u, scheme=MerweScaledSigmaPoints(alpha, beta, kappa),
-                                    mask=mask, missing=missing, gate=gate)
+    return sigma_point_rts_smoother(
+        model, y, u, scheme=MerweScaledSigmaPoints(alpha, beta, kappa), mask=mask, missing=missing, gate=gate
+    )

@@ -32,9 +32,12 @@ def steady_state_kalman(F: Any, Q: Any, H: Any, R: Any) -> SteadyStateKalman:
     """Deprecated alias: ``discrete_kalman(F, H, Q, R)`` (note the order) repackaged with the
     innovation covariance ``S = H P⁻ Hᵀ + R``.  Checks and errors are ``discrete_kalman``'s, naming
     ``F, H, Q, R``."""
-    warnings.warn("steady_state_kalman(F, Q, H, R) is deprecated; use "
-                  "jaxsim.control.kalman_gain.discrete_kalman(A, C, Q, R) (python-control's order)",
-                  DeprecationWarning, stacklevel=2)
+    warnings.warn(
+        "steady_state_kalman(F, Q, H, R) is deprecated; use "
+        "jaxsim.control.kalman_gain.discrete_kalman(A, C, Q, R) (python-control's order)",
+        DeprecationWarning,
+        stacklevel=2,
+    )
     gain = discrete_kalman(F, H, Q, R, names=("F", "H", "Q", "R"))
     h, r = (jnp.atleast_2d(jnp.asarray(m, gain.p_prior.dtype)) for m in (H, R))
     s = symmetrize(h @ gain.p_prior @ h.T + r)

@@ -28,7 +28,9 @@ def miss_distances(measurements: Any, predictions: Any) -> jax.Array:
 
 
 def _mask(distances: jax.Array, mask: Any) -> jax.Array:
-    return jnp.ones(distances.shape, bool) if mask is None else jnp.broadcast_to(jnp.asarray(mask, bool), distances.shape)
+    return (
+        jnp.ones(distances.shape, bool) if mask is None else jnp.broadcast_to(jnp.asarray(mask, bool), distances.shape)
+    )
 
 
 def track_lost(distances: Any, gate: Any, mask: Any = None) -> jax.Array:

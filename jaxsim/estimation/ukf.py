@@ -89,12 +89,16 @@ def check_merwe(scheme: Any, n: int, dtype: Any = float) -> None:
     alpha, kappa = np.asarray(scheme.alpha, dtype=float), np.asarray(scheme.kappa, dtype=float)
     floor = _MIN_SPREAD_EPS * np.finfo(dtype).eps * n
     if np.any(n + kappa <= floor):
-        raise ValueError(f"kappa: n + kappa must be > 0 (the sigma-point spread n + λ = α²(n + κ)), "
-                         f"got kappa={scheme.kappa!r} for n={n}")
+        raise ValueError(
+            f"kappa: n + kappa must be > 0 (the sigma-point spread n + λ = α²(n + κ)), "
+            f"got kappa={scheme.kappa!r} for n={n}"
+        )
     spread = alpha**2 * (n + kappa)
     if np.any(spread <= floor):
-        raise ValueError(f"alpha: too small, n + λ = α²(n + κ) = {float(np.min(spread)):.3g} ≈ 0 for "
-                         f"n={n} (weights 1/(n + λ) blow up; need > {floor:.3g}), got alpha={scheme.alpha!r}")
+        raise ValueError(
+            f"alpha: too small, n + λ = α²(n + κ) = {float(np.min(spread)):.3g} ≈ 0 for "
+            f"n={n} (weights 1/(n + λ) blow up; need > {floor:.3g}), got alpha={scheme.alpha!r}"
+        )
 
 
 def unscented_transform(

@@ -134,8 +134,15 @@ class WindowSelector:
         return int(np.shape(self.slopes)[0]) + 1
 
 
-def window_selector(max_window: int = PAPER_MAX_WINDOW, slope: Any = PAPER_SLOPE, centre: Any = PAPER_CENTRE, *,
-                    kappa: Any = 1.0, clip: Any = PAPER_CLIP, tnorm: str = "product") -> WindowSelector:
+def window_selector(
+    max_window: int = PAPER_MAX_WINDOW,
+    slope: Any = PAPER_SLOPE,
+    centre: Any = PAPER_CENTRE,
+    *,
+    kappa: Any = 1.0,
+    clip: Any = PAPER_CLIP,
+    tnorm: str = "product",
+) -> WindowSelector:
     """The paper's selector (J = 10, a = 5, c = 1.5); ``slope``/``centre`` scalars or ``(J − 1,)``.
 
     Raises:
@@ -147,8 +154,9 @@ def window_selector(max_window: int = PAPER_MAX_WINDOW, slope: Any = PAPER_SLOPE
         raise ValueError(f"tnorm: must be one of {T_NORMS}, got {tnorm!r}")
     for name, v in (("slope", slope), ("centre", centre)):
         if np.shape(v) not in ((), (big_j - 1,)):
-            raise ValueError(f"{name}: expected a scalar or shape ({big_j - 1},) for max_window={big_j}, "
-                             f"got shape {np.shape(v)}")
+            raise ValueError(
+                f"{name}: expected a scalar or shape ({big_j - 1},) for max_window={big_j}, got shape {np.shape(v)}"
+            )
     a = jnp.broadcast_to(jnp.asarray(slope, float), (big_j - 1,))
     c = jnp.broadcast_to(jnp.asarray(centre, float), (big_j - 1,))
     check_positive("slope", a)
@@ -172,8 +180,10 @@ def selector_rules(max_window: int):
 def selector_fis(sel: WindowSelector) -> FuzzySystem:
     """The selector's zero-order Sugeno system over the ``J − 1`` inputs ``L⁽²⁾…L⁽ᴶ⁾``."""
     a, c = jnp.asarray(sel.slopes), jnp.asarray(sel.centres)
-    inputs = [terms("sigmoid", jnp.stack([jnp.stack([c[i], -a[i]]), jnp.stack([c[i], a[i]])]))
-              for i in range(sel.max_window - 1)]
+    inputs = [
+        terms("sigmoid", jnp.stack([jnp.stack([c[i], -a[i]]), jnp.stack([c[i], a[i]])]))
+        for i in range(sel.max_window - 1)
+    ]
     return sugeno(inputs, sel.outputs, selector_rules(sel.max_window), and_norm=sel.tnorm)
 
 
@@ -196,8 +206,9 @@ class Selection(NamedTuple):
     weights: jax.Array
 
 
-def select_windows(sel: WindowSelector, bank: WindowBank, *, smooth: bool = False,
-                   temperature: Any = 0.25) -> Selection:
+def select_windows(
+    sel: WindowSelector, bank: WindowBank, *, smooth: bool = False, temperature: Any = 0.25
+) -> Selection:
     """The window chosen at every scan (before the third plot: window 2, i.e. every plot so far)."""
     big_j = sel.max_window
     if bank.residuals.shape[-1] != big_j - 1:

@@ -25,7 +25,7 @@ def _triangular(t: jax.Array, r: jax.Array, s: jax.Array, upper: bool) -> jax.Ar
     order = reversed(range(n)) if upper else range(n)
     for i in order:
         acc = r[:, i, :]
-        for j in (range(i + 1, n) if upper else range(i)):
+        for j in range(i + 1, n) if upper else range(i):
             acc = acc + (t[i, j] if upper else t[j, i]) * x[j]
         x[i] = acc / (s - t[i, i])[:, None]
     return jnp.stack(x, axis=1)
@@ -38,8 +38,7 @@ def schur_factors(a: jax.Array) -> tuple[jax.Array, jax.Array]:
     return jax.scipy.linalg.schur(jax.lax.stop_gradient(a).astype(cdtype), output="complex")
 
 
-def resolve(a: jax.Array, r: jax.Array, s: jax.Array,
-            factors: tuple[jax.Array, jax.Array] | None = None) -> jax.Array:
+def resolve(a: jax.Array, r: jax.Array, s: jax.Array, factors: tuple[jax.Array, jax.Array] | None = None) -> jax.Array:
     """``(sᵢ I − A)⁻¹ rᵢ`` for ``a (n, n)``, ``r (N, n, k)`` and ``s (N,)`` complex → ``(N, n, k)``.
 
     A ``lax.custom_linear_solve``: the Schur-form solves are never differentiated; derivatives
@@ -63,8 +62,14 @@ def resolve(a: jax.Array, r: jax.Array, s: jax.Array,
     return jax.lax.custom_linear_solve(matvec, r, solve, transpose_solve)
 
 
-def transfer(a: jax.Array, b: jax.Array, c: jax.Array, d: jax.Array, s: jax.Array,
-             factors: tuple[jax.Array, jax.Array] | None = None) -> jax.Array:
+def transfer(
+    a: jax.Array,
+    b: jax.Array,
+    c: jax.Array,
+    d: jax.Array,
+    s: jax.Array,
+    factors: tuple[jax.Array, jax.Array] | None = None,
+) -> jax.Array:
     """``C (sI − A)⁻¹ B + D`` at the points ``s`` (any shape ``S``) → ``S + (p, m)`` complex."""
     cdtype = jnp.result_type(a, b, c, d, s, jnp.complex64)
     shape = s.shape

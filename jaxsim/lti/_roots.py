@@ -33,8 +33,9 @@ def sign_change_brackets(values: jax.Array, k: int, rising_only: bool = False) -
     return idx, jnp.arange(k) < jnp.sum(mask)
 
 
-def bisect(f: VectorFn, theta: Any, lo: jax.Array, hi: jax.Array,
-           steps: int = BISECTION_STEPS) -> tuple[jax.Array, jax.Array]:
+def bisect(
+    f: VectorFn, theta: Any, lo: jax.Array, hi: jax.Array, steps: int = BISECTION_STEPS
+) -> tuple[jax.Array, jax.Array]:
     """Midpoints of the brackets ``[lo, hi]`` (``(K,)``) after ``steps`` bisections of
     ``f(·, stop_gradient(theta))``, and ``f`` at the final left ends (the residual: tiny at a root,
     not at a jump); a bracket without a sign change just shrinks somewhere."""

@@ -17,7 +17,9 @@ from typing import Any
 
 from jaxsim.lti import *  # noqa: F401,F403
 from jaxsim.lti import __all__ as _lti_all
-from jaxsim.lti import c2d, margin as _margin, pole, step_info as _step_info, zero
+from jaxsim.lti import c2d, pole, zero
+from jaxsim.lti import margin as _margin
+from jaxsim.lti import step_info as _step_info
 from jaxsim.lti.design import LQEResult, LQRResult, RiccatiResult, care, dare, dlqe, dlqr, lqe, lqr
 
 poles = pole
@@ -36,6 +38,18 @@ def step_info(*args: Any, **kwargs: Any) -> dict:
 
 
 __all__ = [n for n in _lti_all if n not in ("margin", "step_info")] + [
-    "margin", "step_info", "poles", "zeros", "sample_system",
-    "lqr", "dlqr", "care", "dare", "lqe", "dlqe", "LQRResult", "LQEResult", "RiccatiResult",
+    "margin",
+    "step_info",
+    "poles",
+    "zeros",
+    "sample_system",
+    "lqr",
+    "dlqr",
+    "care",
+    "dare",
+    "lqe",
+    "dlqe",
+    "LQRResult",
+    "LQEResult",
+    "RiccatiResult",
 ]

@@ -155,8 +155,15 @@ def _riccati_args(A, B, Q, R, S, stabilizing):  # noqa: N803
     return a, b, q, r, _cross(a.shape[0], b.shape[1], S, "S")
 
 
-def care(A: Any, B: Any, Q: Any, R: Any = None, S: Any = None, E: Any = None,  # noqa: N803
-         stabilizing: bool = True) -> RiccatiResult:
+def care(
+    A: Any,
+    B: Any,
+    Q: Any,
+    R: Any = None,
+    S: Any = None,
+    E: Any = None,  # noqa: N803
+    stabilizing: bool = True,
+) -> RiccatiResult:
     """python-control's ``care(A, B, Q, R=None, S=None, E=None)`` → ``X, L, G``: the stabilising
     solution of ``AᵀXE + EᵀXA − (EᵀXB + S)R⁻¹(BᵀXE + Sᵀ) + Q = 0``, the closed-loop eigenvalues
     and ``G = R⁻¹(BᵀXE + Sᵀ)`` (``R`` = I when omitted)."""
@@ -169,8 +176,15 @@ def care(A: Any, B: Any, Q: Any, R: Any = None, S: Any = None, E: Any = None,  #
     return RiccatiResult(x, jnp.linalg.eigvals(at - bt @ g), g)
 
 
-def dare(A: Any, B: Any, Q: Any, R: Any, S: Any = None, E: Any = None,  # noqa: N803
-         stabilizing: bool = True) -> RiccatiResult:
+def dare(
+    A: Any,
+    B: Any,
+    Q: Any,
+    R: Any,
+    S: Any = None,
+    E: Any = None,  # noqa: N803
+    stabilizing: bool = True,
+) -> RiccatiResult:
     """python-control's ``dare(A, B, Q, R, S=None, E=None)`` → ``X, L, G``: the stabilising solution
     of ``AᵀXA − EᵀXE − (AᵀXB + S)(BᵀXB + R)⁻¹(BᵀXA + Sᵀ) + Q = 0``, the closed-loop eigenvalues and
     ``G = (BᵀXB + R)⁻¹(BᵀXA + Sᵀ)``."""

@@ -46,9 +46,11 @@ def hold_matrices(a: jax.Array, b: jax.Array, dt: Any) -> tuple[jax.Array, jax.A
     n, m = b.shape
     dtype = jnp.result_type(a, b, jnp.asarray(dt))
     block = jnp.zeros((n + 2 * m, n + 2 * m), dtype)
-    block = block.at[:n, :n].set(a * dt).at[:n, n:n + m].set(b * dt).at[n:n + m, n + m:].set(jnp.eye(m, dtype=dtype))
+    block = (
+        block.at[:n, :n].set(a * dt).at[:n, n : n + m].set(b * dt).at[n : n + m, n + m :].set(jnp.eye(m, dtype=dtype))
+    )
     e = jax.scipy.linalg.expm(block)
-    return e[:n, :n], e[:n, n:n + m], e[:n, n + m:]
+    return e[:n, :n], e[:n, n : n + m], e[:n, n + m :]
 
 
 def _gbt(s: StateSpace, ts: float, alpha: float) -> tuple[jax.Array, ...]:
@@ -63,8 +65,9 @@ def _gbt(s: StateSpace, ts: float, alpha: float) -> tuple[jax.Array, ...]:
 
 def _matched(s: StateSpace, ts: float) -> StateSpace:
     if not s.is_siso():
-        raise ValueError(f"sysc: the matched method is for SISO systems, got {s.n_outputs} outputs "
-                         f"and {s.n_inputs} inputs")
+        raise ValueError(
+            f"sysc: the matched method is for SISO systems, got {s.n_outputs} outputs and {s.n_inputs} inputs"
+        )
     p, z = pole(s), zero(s)
     if is_concrete(p) and np.any(np.abs(np.asarray(p)) < 1e-12 * max(1.0, float(np.max(np.abs(np.asarray(p)))))):
         raise ValueError("sysc: the matched method matches the DC gain, which is infinite with a pole at s = 0")
@@ -90,8 +93,13 @@ def _matched(s: StateSpace, ts: float) -> StateSpace:
     return tf_state_space(num, den, ts)
 
 
-def c2d(sysc: Any, Ts: Any, method: str = "zoh", alpha: float | None = None,  # noqa: N803
-        prewarp_frequency: float | None = None) -> StateSpace:
+def c2d(
+    sysc: Any,
+    Ts: Any,
+    method: str = "zoh",
+    alpha: float | None = None,  # noqa: N803
+    prewarp_frequency: float | None = None,
+) -> StateSpace:
     """python-control's ``c2d(sysc, Ts, method='zoh', alpha=None, prewarp_frequency=None)``.
 
     Args:

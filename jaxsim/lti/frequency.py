@@ -3,7 +3,8 @@
 ``G(s) = C (sI − A)⁻¹ B + D`` at ``s = jω`` (continuous) or ``z = e^{jω·dt}`` (discrete), through
 one Schur decomposition of ``A`` and a triangular solve per frequency (:mod:`jaxsim.lti._resolvent`),
 so it is exact to rounding and ``jit``/``vmap``/``grad``-able (any order) in the matrices and in
-``ω``.  The Schur form is LAPACK's: CPU.  Shapes follow python-control: ``(N,)`` for a SISO system, ``(p, m, N)`` otherwise
+``ω``.  The Schur form is LAPACK's: CPU.  Shapes follow python-control: ``(N,)`` for a SISO system, ``(p, m, N)``
+otherwise
 (``squeeze=False`` keeps ``(p, m, N)`` always); ``ω`` in rad/s, phase in rad.
 """
 
@@ -127,8 +128,9 @@ class FrequencyResponse(NamedTuple):
         return self.magnitude * jnp.exp(1j * self.phase)
 
 
-def frequency_response(sys: Any, omega: Any = None, omega_num: int | None = None,
-                       squeeze: bool | None = None) -> FrequencyResponse:
+def frequency_response(
+    sys: Any, omega: Any = None, omega_num: int | None = None, squeeze: bool | None = None
+) -> FrequencyResponse:
     """python-control's ``frequency_response(sys, omega)``: magnitude, wrapped phase (``angle``, in
     ``(−π, π]``) and the frequencies.  ``omega`` (rad/s, 1-D) is required under tracing; without it
     :func:`default_omega` chooses ``omega_num`` points."""
@@ -138,8 +140,7 @@ def frequency_response(sys: Any, omega: Any = None, omega_num: int | None = None
     return FrequencyResponse(jnp.abs(g), jnp.angle(g), w)
 
 
-def bode(sys: Any, omega: Any = None, omega_num: int | None = None,
-         squeeze: bool | None = None) -> FrequencyResponse:
+def bode(sys: Any, omega: Any = None, omega_num: int | None = None, squeeze: bool | None = None) -> FrequencyResponse:
     """Bode data (no plot): as :func:`frequency_response` but with the phase unwrapped along ``ω``,
     its first value placed in ``(−2π, 0]`` — python-control's ``bode(..., plot=False)`` data."""
     fr = frequency_response(sys, omega, omega_num, squeeze)

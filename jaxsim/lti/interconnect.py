@@ -55,7 +55,7 @@ def _series2(s1: StateSpace, s2: StateSpace, names: tuple[str, str]) -> StateSpa
     if s1.n_outputs != s2.n_inputs:
         raise ValueError(f"{names[1]}: has {s2.n_inputs} inputs but {names[0]} has {s1.n_outputs} outputs")
     a = _block_diag(s1.a, s2.a)
-    a = a.at[s1.n_states:, :s1.n_states].set(s2.b @ s1.c)
+    a = a.at[s1.n_states :, : s1.n_states].set(s2.b @ s1.c)
     b = jnp.concatenate([s1.b, s2.b @ s1.d], axis=0)
     c = jnp.concatenate([s2.d @ s1.c, s2.c], axis=1)
     return StateSpace(a, b, c, s2.d @ s1.d, _common_dt([(names[0], s1), (names[1], s2)]))
@@ -63,11 +63,17 @@ def _series2(s1: StateSpace, s2: StateSpace, names: tuple[str, str]) -> StateSpa
 
 def _parallel2(s1: StateSpace, s2: StateSpace, names: tuple[str, str]) -> StateSpace:
     if (s1.n_outputs, s1.n_inputs) != (s2.n_outputs, s2.n_inputs):
-        raise ValueError(f"{names[1]}: has {s2.n_outputs} outputs and {s2.n_inputs} inputs, {names[0]} has "
-                         f"{s1.n_outputs} and {s1.n_inputs}; parallel needs equal sizes")
-    return StateSpace(_block_diag(s1.a, s2.a), jnp.concatenate([s1.b, s2.b], axis=0),
-                      jnp.concatenate([s1.c, s2.c], axis=1), s1.d + s2.d,
-                      _common_dt([(names[0], s1), (names[1], s2)]))
+        raise ValueError(
+            f"{names[1]}: has {s2.n_outputs} outputs and {s2.n_inputs} inputs, {names[0]} has "
+            f"{s1.n_outputs} and {s1.n_inputs}; parallel needs equal sizes"
+        )
+    return StateSpace(
+        _block_diag(s1.a, s2.a),
+        jnp.concatenate([s1.b, s2.b], axis=0),
+        jnp.concatenate([s1.c, s2.c], axis=1),
+        s1.d + s2.d,
+        _common_dt([(names[0], s1), (names[1], s2)]),
+    )
 
 
 def _operands(systems: tuple[Any, ...], size_of_scalar) -> list[tuple[str, StateSpace]]:
@@ -134,15 +140,19 @@ def feedback(sys1: Any, sys2: Any = 1, sign: int = -1) -> Plant | StateSpace:
     else:
         s2 = to_state_space(sys2, "sys2")
     if (s2.n_inputs, s2.n_outputs) != (s1.n_outputs, s1.n_inputs):
-        raise ValueError(f"sys2: must map the {s1.n_outputs} outputs of sys1 to its {s1.n_inputs} inputs, "
-                         f"got {s2.n_inputs} inputs and {s2.n_outputs} outputs")
+        raise ValueError(
+            f"sys2: must map the {s1.n_outputs} outputs of sys1 to its {s1.n_inputs} inputs, "
+            f"got {s2.n_inputs} inputs and {s2.n_outputs} outputs"
+        )
     dt = _common_dt([("sys1", s1), ("sys2", s2)])
     sg = float(sign)
     p1, m1, n1 = s1.n_outputs, s1.n_inputs, s1.n_states
     loop = jnp.eye(p1, dtype=s1.d.dtype) - sg * s1.d @ s2.d
     if is_concrete(loop) and np.linalg.cond(np.asarray(loop)) > 1e12:
-        raise ValueError("sys2: the feedback loop is algebraically ill-posed: I − sign·D1·D2 is singular "
-                         "(the feedthrough terms cancel around the loop)")
+        raise ValueError(
+            "sys2: the feedback loop is algebraically ill-posed: I − sign·D1·D2 is singular "
+            "(the feedthrough terms cancel around the loop)"
+        )
     # y = Cy [x1; x2] + Dy u, from (I − sign·D1 D2) y = C1 x1 + sign·D1 C2 x2 + D1 u
     cy = jnp.linalg.solve(loop, jnp.concatenate([s1.c, sg * s1.d @ s2.c], axis=1))
     dy = jnp.linalg.solve(loop, s1.d)

@@ -97,8 +97,9 @@ class AllMargins(NamedTuple):
 def _siso(sys: Any) -> StateSpace:
     s = as_state_space(sys)
     if not s.is_siso():
-        raise ValueError(f"sys: margins need a SISO loop transfer function, got {s.n_outputs} outputs "
-                         f"and {s.n_inputs} inputs")
+        raise ValueError(
+            f"sys: margins need a SISO loop transfer function, got {s.n_outputs} outputs and {s.n_inputs} inputs"
+        )
     return s
 
 
@@ -276,8 +277,9 @@ def _options(s: StateSpace, n_grid: int | None, max_crossings: int | None, epsw:
     return n_grid, k, epsw
 
 
-def stability_margins(sys: Any, returnall: bool = False, epsw: float = 0.0, *, n_grid: int | None = None,
-                      max_crossings: int | None = None) -> StabilityMargins | AllMargins:
+def stability_margins(
+    sys: Any, returnall: bool = False, epsw: float = 0.0, *, n_grid: int | None = None, max_crossings: int | None = None
+) -> StabilityMargins | AllMargins:
     """python-control's ``stability_margins(sys, returnall=False, epsw=0.0)`` (definitions in the
     module docstring).
 
@@ -297,7 +299,9 @@ def stability_margins(sys: Any, returnall: bool = False, epsw: float = 0.0, *, n
         ValueError: naming ``sys`` (not SISO, not LTI), ``epsw``, ``n_grid``, ``max_crossings``.
     """
     s = _siso(sys)
-    (gm, w_pc, ok_pc), (pm, w_gc, ok_gc, dm), (sm, w_ms, ok_ms) = _all(s, *_options(s, n_grid, max_crossings, epsw), True)
+    (gm, w_pc, ok_pc), (pm, w_gc, ok_gc, dm), (sm, w_ms, ok_ms) = _all(
+        s, *_options(s, n_grid, max_crossings, epsw), True
+    )
     if returnall:
         out = AllMargins(gm, pm, sm, w_pc, w_gc, w_ms, dm)
         oks = (ok_pc, ok_gc, ok_ms, ok_pc, ok_gc, ok_ms, ok_gc)

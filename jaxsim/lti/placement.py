@@ -101,7 +101,7 @@ def _allowed_subspaces(a: jax.Array, u1: jax.Array, p: jax.Array, m: int) -> jax
     def basis(lam):
         mat = u1.T.astype(p.dtype) @ (a.astype(p.dtype) - lam * jnp.eye(n, dtype=p.dtype))
         _, _, vh = jnp.linalg.svd(mat, full_matrices=True)
-        return vh[n - m:].conj().T
+        return vh[n - m :].conj().T
 
     return jax.vmap(basis)(p)
 
@@ -146,8 +146,11 @@ def _gain_from_parameters(a: jax.Array, b: jax.Array, p: jax.Array, g: jax.Array
     """``K = G X⁻¹`` with ``x_j = (A − λ_j I)⁻¹ B g_j`` (columns ``g_j`` of ``G``) — the smooth family."""
     n = a.shape[0]
     cd = p.dtype
-    x = jax.vmap(lambda lam, gj: jnp.linalg.solve(a.astype(cd) - lam * jnp.eye(n, dtype=cd), b.astype(cd) @ gj),
-                 in_axes=(0, 1), out_axes=1)(p, g)
+    x = jax.vmap(
+        lambda lam, gj: jnp.linalg.solve(a.astype(cd) - lam * jnp.eye(n, dtype=cd), b.astype(cd) @ gj),
+        in_axes=(0, 1),
+        out_axes=1,
+    )(p, g)
     return jnp.real(jnp.linalg.solve(x.T, g.T).T)
 
 
@@ -185,8 +188,10 @@ def place(A: Any, B: Any, p: Any) -> jax.Array:  # noqa: N803
         v = np.asarray(poles)
         mult = max(int(np.sum(np.isclose(v, x, rtol=1e-10, atol=1e-12))) for x in v)
         if mult > m:
-            raise ValueError(f"p: a pole repeated {mult} times cannot be placed with rank(B) = {m} "
-                             "(use acker for repeated poles of a single-input system)")
+            raise ValueError(
+                f"p: a pole repeated {mult} times cannot be placed with rank(B) = {m} "
+                "(use acker for repeated poles of a single-input system)"
+            )
     if b.shape[1] == a.shape[0]:
         return _place_square(a, b, poles)
     return _place(a, b, poles)

@@ -112,8 +112,10 @@ def zero(sys: Any) -> jax.Array:
     """
     s = as_state_space(sys)
     if s.n_outputs != s.n_inputs:
-        raise ValueError(f"sys: zero() needs a square system (as many outputs as inputs), "
-                         f"got {s.n_outputs} outputs and {s.n_inputs} inputs")
+        raise ValueError(
+            f"sys: zero() needs a square system (as many outputs as inputs), "
+            f"got {s.n_outputs} outputs and {s.n_inputs} inputs"
+        )
     cdtype = jnp.result_type(s.a, jnp.complex64)
     if s.n_states == 0:
         return jnp.zeros((0,), dtype=cdtype)
@@ -122,8 +124,10 @@ def zero(sys: Any) -> jax.Array:
         if not bool(nonzero_rows):
             raise ValueError("sys: an output has an identically zero transfer row; its zeros are undefined")
         if np.linalg.cond(np.asarray(delta)) > 1e12:
-            raise ValueError("sys: singular decoupling matrix (MIMO structure not covered by zero(); "
-                             "each output's first nonzero Markov rows must be independent)")
+            raise ValueError(
+                "sys: singular decoupling matrix (MIMO structure not covered by zero(); "
+                "each output's first nonzero Markov rows must be independent)"
+            )
     zeros = simple_eigvals(a_z, keep)
     if is_concrete(zeros):
         return zeros[np.asarray(keep)]

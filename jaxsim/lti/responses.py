@@ -129,8 +129,9 @@ def _time(sys: Any, T: Any, T_num: int | None) -> jax.Array:  # noqa: N803
             raise ValueError("T: time points must be increasing and equally spaced")
         dt_sys = as_state_space(sys).dt if is_lti(sys) else None
         if dt_sys is not None and not np.isclose(step[0], dt_sys, rtol=1e-9, atol=0.0):
-            raise ValueError(f"T: a discrete system with dt={dt_sys} needs time points spaced by dt, "
-                             f"got spacing {step[0]:.6g}")
+            raise ValueError(
+                f"T: a discrete system with dt={dt_sys} needs time points spaced by dt, got spacing {step[0]:.6g}"
+            )
     return t
 
 
@@ -155,8 +156,10 @@ def _inputs(U: Any, m: int, n_t: int) -> jax.Array:  # noqa: N803
     elif u.ndim == 1 and m == 1 and u.shape[0] == n_t:
         u = u.reshape(1, n_t)
     if u.shape != (m, n_t):
-        raise ValueError(f"U: expected a scalar, ({n_t},) for a single input, or ({m}, {n_t}) "
-                         f"(inputs × time points), got {tuple(jnp.shape(U))}")
+        raise ValueError(
+            f"U: expected a scalar, ({n_t},) for a single input, or ({m}, {n_t}) "
+            f"(inputs × time points), got {tuple(jnp.shape(U))}"
+        )
     check_finite("U", u)
     return u
 
@@ -196,8 +199,9 @@ def _lti_discrete(s: StateSpace, u: jax.Array, x0: jax.Array) -> jax.Array:
     return jnp.concatenate([x0[None], xs], axis=0)
 
 
-def _nonlinear(plant: Plant, t: jax.Array, u: jax.Array, x0: jax.Array, hold: str, solver: Solver,
-               substeps: int) -> jax.Array:
+def _nonlinear(
+    plant: Plant, t: jax.Array, u: jax.Array, x0: jax.Array, hold: str, solver: Solver, substeps: int
+) -> jax.Array:
     if t.shape[0] == 1:
         return x0[None]
     dt = t[1] - t[0]
@@ -218,8 +222,9 @@ def _nonlinear(plant: Plant, t: jax.Array, u: jax.Array, x0: jax.Array, hold: st
 
 
 @partial(jax.jit, static_argnames=("hold", "solver", "substeps"))
-def _simulate(sys: Any, t: jax.Array, u: jax.Array, x0: jax.Array, hold: str, solver: Solver,
-              substeps: int) -> tuple[jax.Array, jax.Array]:
+def _simulate(
+    sys: Any, t: jax.Array, u: jax.Array, x0: jax.Array, hold: str, solver: Solver, substeps: int
+) -> tuple[jax.Array, jax.Array]:
     """``(states (N, n), outputs (N, p))`` for inputs ``u (N, m)``."""
     if is_lti(sys):
         s = as_state_space(sys)
@@ -256,9 +261,17 @@ def _squeeze(y: jax.Array, x: jax.Array, siso: bool, squeeze: bool | None, trace
 # --- public functions ---------------------------------------------------------------------------
 
 
-def forced_response(sys: Any, T: Any = None, U: Any = 0.0, X0: Any = 0.0, *,  # noqa: N803
-                    hold: str = "linear", squeeze: bool | None = None, solver: Solver = RK4,
-                    substeps: int = 10) -> TimeResponse:
+def forced_response(
+    sys: Any,
+    T: Any = None,
+    U: Any = 0.0,
+    X0: Any = 0.0,
+    *,  # noqa: N803
+    hold: str = "linear",
+    squeeze: bool | None = None,
+    solver: Solver = RK4,
+    substeps: int = 10,
+) -> TimeResponse:
     """python-control's ``forced_response(sys, T, U, X0)``: the response to the input ``U``.
 
     Args:
@@ -281,8 +294,9 @@ def forced_response(sys: Any, T: Any = None, U: Any = 0.0, X0: Any = 0.0, *,  # 
         if is_lti(sys) and as_state_space(sys).dt is not None and np.ndim(U) >= 1:
             T = np.arange(np.shape(U)[-1]) * as_state_space(sys).dt
         else:
-            raise ValueError("T: the time points are required (only a discrete system given an input "
-                             "array U can do without)")
+            raise ValueError(
+                "T: the time points are required (only a discrete system given an input array U can do without)"
+            )
     t = _time(sys, T, None)
     u = _inputs(U, m, t.shape[0])
     x0 = _initial_state(X0, n)
@@ -306,9 +320,18 @@ def _per_input(sys: Any, t: jax.Array, inputs: list[int], x0_of, u_of, solver, s
     return jnp.stack(ys, axis=1), jnp.stack(xs, axis=1)
 
 
-def step_response(sys: Any, T: Any = None, X0: Any = 0.0, input: int | None = None,  # noqa: A002,N803
-                  output: int | None = None, T_num: int | None = None, squeeze: bool | None = None, *,
-                  solver: Solver = RK4, substeps: int = 10) -> TimeResponse:
+def step_response(
+    sys: Any,
+    T: Any = None,
+    X0: Any = 0.0,
+    input: int | None = None,  # noqa: A002,N803
+    output: int | None = None,
+    T_num: int | None = None,
+    squeeze: bool | None = None,
+    *,
+    solver: Solver = RK4,
+    substeps: int = 10,
+) -> TimeResponse:
     """python-control's ``step_response(sys, T, X0, input, output, T_num)``: a unit step on each
     input in turn (all others zero) from ``X0``; exact for LTI systems.
 
@@ -322,23 +345,30 @@ def step_response(sys: Any, T: Any = None, X0: Any = 0.0, input: int | None = No
     x0 = _initial_state(X0, n)
     dtype = jnp.result_type(t, x0)
     inputs = list(range(m)) if i_in is None else [i_in]
-    ys, xs = _per_input(sys, t, inputs, lambda j: x0,
-                        lambda j: jnp.zeros((t.shape[0], m), dtype).at[:, j].set(1.0), solver, substeps)
+    ys, xs = _per_input(
+        sys, t, inputs, lambda j: x0, lambda j: jnp.zeros((t.shape[0], m), dtype).at[:, j].set(1.0), solver, substeps
+    )
     if i_out is not None:
-        ys = ys[i_out:i_out + 1]
+        ys = ys[i_out : i_out + 1]
     y, x = _squeeze(ys, xs, ys.shape[0] == 1 and ys.shape[1] == 1, squeeze, traces=True)
     return TimeResponse(t, y, x)
 
 
-def impulse_response(sys: Any, T: Any = None, input: int | None = None,  # noqa: A002,N803
-                     output: int | None = None, T_num: int | None = None,
-                     squeeze: bool | None = None) -> TimeResponse:
+def impulse_response(
+    sys: Any,
+    T: Any = None,
+    input: int | None = None,  # noqa: A002,N803
+    output: int | None = None,
+    T_num: int | None = None,
+    squeeze: bool | None = None,
+) -> TimeResponse:
     """python-control's ``impulse_response(sys, T, input, output, T_num)`` for an LTI system: a unit
     impulse on each input in turn (continuous: ``x(0⁺) = B eⱼ``, the ``D δ(t)`` output term left
     out; discrete: ``u₀ = 1/dt``).  Shapes as :func:`step_response`."""
     if not is_lti(sys):
-        raise ValueError("sys: impulse_response needs an LTI system (a nonlinear plant has no "
-                         "well-defined impulse response)")
+        raise ValueError(
+            "sys: impulse_response needs an LTI system (a nonlinear plant has no well-defined impulse response)"
+        )
     s = as_state_space(sys)
     n, m, p = s.n_states, s.n_inputs, s.n_outputs
     i_in, i_out = _index("input", input, m), _index("output", output, p)
@@ -349,17 +379,26 @@ def impulse_response(sys: Any, T: Any = None, input: int | None = None,  # noqa:
     if s.dt is None:
         ys, xs = _per_input(sys, t, inputs, lambda j: s.b[:, j].astype(dtype), lambda j: zeros_u, RK4, 1)
     else:
-        ys, xs = _per_input(sys, t, inputs, lambda j: jnp.zeros((n,), dtype),
-                            lambda j: zeros_u.at[0, j].set(1.0 / s.dt), RK4, 1)
+        ys, xs = _per_input(
+            sys, t, inputs, lambda j: jnp.zeros((n,), dtype), lambda j: zeros_u.at[0, j].set(1.0 / s.dt), RK4, 1
+        )
     if i_out is not None:
-        ys = ys[i_out:i_out + 1]
+        ys = ys[i_out : i_out + 1]
     y, x = _squeeze(ys, xs, ys.shape[0] == 1 and ys.shape[1] == 1, squeeze, traces=True)
     return TimeResponse(t, y, x)
 
 
-def initial_response(sys: Any, T: Any = None, X0: Any = 0.0, output: int | None = None,  # noqa: N803
-                     T_num: int | None = None, squeeze: bool | None = None, *,
-                     solver: Solver = RK4, substeps: int = 10) -> TimeResponse:
+def initial_response(
+    sys: Any,
+    T: Any = None,
+    X0: Any = 0.0,
+    output: int | None = None,  # noqa: N803
+    T_num: int | None = None,
+    squeeze: bool | None = None,
+    *,
+    solver: Solver = RK4,
+    substeps: int = 10,
+) -> TimeResponse:
     """python-control's ``initial_response(sys, T, X0, output, T_num)``: the free response from
     ``X0`` (zero input).  Shapes as :func:`forced_response` (squeezed for a SISO system or a
     selected ``output``)."""
@@ -370,6 +409,6 @@ def initial_response(sys: Any, T: Any = None, X0: Any = 0.0, output: int | None 
     x0 = _initial_state(X0, n)
     u = jnp.zeros((t.shape[0], m), jnp.result_type(t, x0))
     xs, ys = _simulate(sys, t, u, x0, "zoh", solver, substeps)
-    ys = ys.T if i_out is None else ys.T[i_out:i_out + 1]
+    ys = ys.T if i_out is None else ys.T[i_out : i_out + 1]
     y, x = _squeeze(ys, xs.T, (m == 1 and p == 1) or i_out is not None, squeeze, traces=False)
     return TimeResponse(t, y, x)

@@ -75,10 +75,20 @@ def lti_plant(sys: StateSpace, name: str = "lti") -> Plant:
     The plant functions are module-level, so two LTI plants of the same sizes share one jit cache
     entry whatever their matrices."""
     if sys.dt is not None:
-        raise ValueError(f"sys: a discrete-time system (dt={sys.dt!r}) cannot be a Plant, whose "
-                         "dynamics are continuous; keep the StateSpace, or model the plant in continuous time")
-    return Plant(params=sys, dynamics=_lti_dynamics, output=_lti_output, n_states=sys.n_states,
-                 n_inputs=sys.n_inputs, n_outputs=sys.n_outputs, name=name, feedthrough=_lti_feedthrough)
+        raise ValueError(
+            f"sys: a discrete-time system (dt={sys.dt!r}) cannot be a Plant, whose "
+            "dynamics are continuous; keep the StateSpace, or model the plant in continuous time"
+        )
+    return Plant(
+        params=sys,
+        dynamics=_lti_dynamics,
+        output=_lti_output,
+        n_states=sys.n_states,
+        n_inputs=sys.n_inputs,
+        n_outputs=sys.n_outputs,
+        name=name,
+        feedthrough=_lti_feedthrough,
+    )
 
 
 def is_lti(sys: Any) -> bool:
@@ -100,10 +110,13 @@ def as_state_space(sys: Any, name: str = "sys") -> StateSpace:
     if isinstance(sys, Plant):
         if is_lti(sys):
             return sys.params
-        raise ValueError(f"{name}: plant {sys.name!r} is not an LTI plant (built by ss, tf or zpk); "
-                         "linearise it first (jaxsim.core.linearize) and pass ss(*linearization)")
-    raise ValueError(f"{name}: expected an LTI system (a Plant from ss/tf/zpk or a StateSpace), "
-                     f"got {type(sys).__name__}")
+        raise ValueError(
+            f"{name}: plant {sys.name!r} is not an LTI plant (built by ss, tf or zpk); "
+            "linearise it first (jaxsim.core.linearize) and pass ss(*linearization)"
+        )
+    raise ValueError(
+        f"{name}: expected an LTI system (a Plant from ss/tf/zpk or a StateSpace), got {type(sys).__name__}"
+    )
 
 
 def wrap(sys: StateSpace) -> Plant | StateSpace:

@@ -42,8 +42,17 @@ class StepInfo(NamedTuple):
     def as_dict(self) -> dict[str, Any]:
         """python-control's dictionary keys (``RiseTime``, ``SettlingTime``, …), values as floats
         (SISO) or nested lists (MIMO)."""
-        keys = ("RiseTime", "SettlingTime", "SettlingMin", "SettlingMax", "Overshoot", "Undershoot",
-                "Peak", "PeakTime", "SteadyStateValue")
+        keys = (
+            "RiseTime",
+            "SettlingTime",
+            "SettlingMin",
+            "SettlingMax",
+            "Overshoot",
+            "Undershoot",
+            "Peak",
+            "PeakTime",
+            "SteadyStateValue",
+        )
         return {k: (float(v) if jnp.ndim(v) == 0 else jnp.asarray(v).tolist()) for k, v in zip(keys, self)}
 
 
@@ -61,14 +70,27 @@ def _one_trace(t: jax.Array, y: jax.Array, yf: jax.Array, band: float, limits: t
     ok = jnp.isfinite(yf)
     nan = jnp.full_like(yf, jnp.nan)
     pick = lambda v: jnp.where(ok, v, nan)  # noqa: E731
-    return StepInfo(pick(core.rise_time), pick(core.settling_time), pick(s_min), pick(s_max),
-                    pick(core.overshoot), pick(undershoot), jnp.where(ok, core.peak, jnp.inf),
-                    jnp.where(ok, core.peak_time, jnp.inf), pick(yf))
+    return StepInfo(
+        pick(core.rise_time),
+        pick(core.settling_time),
+        pick(s_min),
+        pick(s_max),
+        pick(core.overshoot),
+        pick(undershoot),
+        jnp.where(ok, core.peak, jnp.inf),
+        jnp.where(ok, core.peak_time, jnp.inf),
+        pick(yf),
+    )
 
 
-def step_info(sysdata: Any, T: Any = None, T_num: int | None = None, yfinal: Any = None,  # noqa: N803
-              SettlingTimeThreshold: float = 0.02,  # noqa: N803
-              RiseTimeLimits: tuple[float, float] = (0.1, 0.9)) -> StepInfo:  # noqa: N803
+def step_info(
+    sysdata: Any,
+    T: Any = None,
+    T_num: int | None = None,
+    yfinal: Any = None,  # noqa: N803
+    SettlingTimeThreshold: float = 0.02,  # noqa: N803
+    RiseTimeLimits: tuple[float, float] = (0.1, 0.9),
+) -> StepInfo:  # noqa: N803
     """python-control's ``step_info(sysdata, T, T_num, yfinal, SettlingTimeThreshold, RiseTimeLimits)``.
 
     Args:

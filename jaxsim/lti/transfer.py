@@ -24,14 +24,17 @@ from jaxsim.lti.statespace import StateSpace, check_dt, state_space, wrap
 def _coefficients(name: str, c: Any) -> jax.Array:
     """A 1-D real coefficient array (a scalar is a constant polynomial)."""
     if isinstance(c, (list, tuple)) and any(isinstance(e, (list, tuple, np.ndarray)) for e in c):
-        raise ValueError(f"{name}: nested coefficient lists (MIMO transfer functions) are not supported; "
-                         "build MIMO systems with ss, or interconnect SISO ones")
+        raise ValueError(
+            f"{name}: nested coefficient lists (MIMO transfer functions) are not supported; "
+            "build MIMO systems with ss, or interconnect SISO ones"
+        )
     arr = jnp.asarray(c)
     check_real(name, arr)
     arr = jnp.atleast_1d(arr.astype(jnp.result_type(arr, float)))
     if arr.ndim != 1:
-        raise ValueError(f"{name}: expected a 1-D array of coefficients (descending powers), "
-                         f"got shape {tuple(arr.shape)}")
+        raise ValueError(
+            f"{name}: expected a 1-D array of coefficients (descending powers), got shape {tuple(arr.shape)}"
+        )
     if arr.shape[0] == 0:
         raise ValueError(f"{name}: needs at least one coefficient")
     check_finite(name, arr)
@@ -45,7 +48,7 @@ def _strip_leading_zeros(name: str, c: jax.Array) -> jax.Array:
     nonzero = np.flatnonzero(np.asarray(c) != 0.0)
     if nonzero.size == 0:
         return c[-1:]
-    return c[int(nonzero[0]):]
+    return c[int(nonzero[0]) :]
 
 
 def tf_state_space(num: Any, den: Any, dt: Any = None) -> StateSpace:
@@ -56,8 +59,10 @@ def tf_state_space(num: Any, den: Any, dt: Any = None) -> StateSpace:
     if is_concrete(den) and not np.any(np.asarray(den) != 0.0):
         raise ValueError("den: the denominator polynomial is zero")
     if num.shape[0] > den.shape[0]:
-        raise ValueError(f"num: the transfer function is not proper (numerator degree {num.shape[0] - 1} > "
-                         f"denominator degree {den.shape[0] - 1}); it has no state-space realisation")
+        raise ValueError(
+            f"num: the transfer function is not proper (numerator degree {num.shape[0] - 1} > "
+            f"denominator degree {den.shape[0] - 1}); it has no state-space realisation"
+        )
     a, b, c, d = tf2ss(num, den)
     return state_space(a, b, c, d, dt)
 

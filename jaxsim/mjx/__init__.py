@@ -36,7 +36,24 @@ from jaxsim.mjx.plant import (
 from jaxsim.mjx.trms import trms_mjcf, trms_mjx_plant
 
 __all__ = [
-    "ActuatedParams", "FIELDS", "auv_mjcf", "auv_mjx_plant", "helicopter_mjcf", "helicopter_mjx_plant", "Layout", "MJCFParams", "actuated_plant", "forward_field", "layout",
-    "load_mjcf", "mjcf_params", "mjcf_plant", "qpos_rate", "step", "step_field", "step_sequence",
-    "trms_mjcf", "trms_mjx_plant",
+    "ActuatedParams",
+    "FIELDS",
+    "auv_mjcf",
+    "auv_mjx_plant",
+    "helicopter_mjcf",
+    "helicopter_mjx_plant",
+    "Layout",
+    "MJCFParams",
+    "actuated_plant",
+    "forward_field",
+    "layout",
+    "load_mjcf",
+    "mjcf_params",
+    "mjcf_plant",
+    "qpos_rate",
+    "step",
+    "step_field",
+    "step_sequence",
+    "trms_mjcf",
+    "trms_mjx_plant",
 ]

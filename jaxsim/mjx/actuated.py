@@ -21,7 +21,8 @@ import jax.numpy as jnp
 
 from jaxsim.core.pytree import pytree_dataclass, static_field
 from jaxsim.core.system import Plant
-from jaxsim.mjx.plant import MJCFParams, check_control, output as rigid_output, rigid_field
+from jaxsim.mjx.plant import MJCFParams, check_control, rigid_field
+from jaxsim.mjx.plant import output as rigid_output
 
 ActuatorFn = Callable[[Any, jax.Array, jax.Array, jax.Array], jax.Array]
 
@@ -48,8 +49,10 @@ def split(p: ActuatedParams, x: jax.Array) -> tuple[jax.Array, jax.Array]:
 def _check_input(p: ActuatedParams, x: jax.Array, u: jax.Array) -> None:
     n = p.rigid.layout.n_states + p.n_actuator_states
     if jnp.shape(x) != (n,):
-        raise ValueError(f"x: expected shape ({n},) = rigid (qpos, qvel) + {p.n_actuator_states} actuator "
-                         f"states, got {tuple(jnp.shape(x))}")
+        raise ValueError(
+            f"x: expected shape ({n},) = rigid (qpos, qvel) + {p.n_actuator_states} actuator "
+            f"states, got {tuple(jnp.shape(x))}"
+        )
     if jnp.shape(u) != (p.n_inputs,):
         raise ValueError(f"u: expected shape ({p.n_inputs},), got {tuple(jnp.shape(u))}")
 
@@ -89,8 +92,16 @@ def actuated_plant(
         raise ValueError(f"n_actuator_states: must be >= 0, got {n_actuator_states!r}")
     if int(n_inputs) < 1:
         raise ValueError(f"n_inputs: must be >= 1, got {n_inputs!r}")
-    p = ActuatedParams(rigid, actuator_params, actuator_dynamics, actuator_controls,
-                       int(n_actuator_states), int(n_inputs), field)
+    p = ActuatedParams(
+        rigid, actuator_params, actuator_dynamics, actuator_controls, int(n_actuator_states), int(n_inputs), field
+    )
     lay = rigid.layout
-    return Plant(p, dynamics, output, n_states=lay.n_states + int(n_actuator_states),
-                 n_inputs=int(n_inputs), n_outputs=lay.n_outputs, name=name)
+    return Plant(
+        p,
+        dynamics,
+        output,
+        n_states=lay.n_states + int(n_actuator_states),
+        n_inputs=int(n_inputs),
+        n_outputs=lay.n_outputs,
+        name=name,
+    )

@@ -31,8 +31,9 @@ FORCE_NAMES = ("X", "Y", "Z", "K", "M", "N")
 def rigid_body_params(params: AUVParams | None = None) -> AUVParams:
     """``params`` with added mass, damping and restoring forces switched off."""
     p = AUVParams() if params is None else params
-    return replace(p, M_A=np.zeros((6, 6)), d1=np.zeros(6), d2=np.zeros(6), r_g=np.zeros(3), r_b=np.zeros(3),
-                   buoyancy=p.weight)
+    return replace(
+        p, M_A=np.zeros((6, 6)), d1=np.zeros(6), d2=np.zeros(6), r_g=np.zeros(3), r_b=np.zeros(3), buoyancy=p.weight
+    )
 
 
 def auv_mjcf(params: AUVParams | None = None, timestep: float = 1e-3) -> str:
@@ -44,7 +45,8 @@ def auv_mjcf(params: AUVParams | None = None, timestep: float = 1e-3) -> str:
     mass, inertia = float(m_r[0, 0]), [float(v) for v in m_r.diagonal()[3:]]
     actuators = "\n".join(
         f'    <general name="{n}" site="origin" gear="{" ".join("1" if j == i else "0" for j in range(6))}"/>'
-        for i, n in enumerate(FORCE_NAMES))
+        for i, n in enumerate(FORCE_NAMES)
+    )
     return f"""<mujoco model="auv_rigid_body">
   <option timestep="{timestep!r}" gravity="0 0 0" integrator="Euler"/>
   <worldbody>
@@ -69,12 +71,14 @@ def auv_mjx_plant(params: AUVParams | None = None, field: str = "forward", times
 def _quat_from_rotation(rot: jax.Array) -> jax.Array:
     """(w, x, y, z) of a rotation matrix (Shepperd's method, branch on the largest component)."""
     tr = jnp.trace(rot)
-    cands = jnp.stack([
-        jnp.stack([1 + tr, rot[2, 1] - rot[1, 2], rot[0, 2] - rot[2, 0], rot[1, 0] - rot[0, 1]]),
-        jnp.stack([rot[2, 1] - rot[1, 2], 1 + 2 * rot[0, 0] - tr, rot[0, 1] + rot[1, 0], rot[0, 2] + rot[2, 0]]),
-        jnp.stack([rot[0, 2] - rot[2, 0], rot[0, 1] + rot[1, 0], 1 + 2 * rot[1, 1] - tr, rot[1, 2] + rot[2, 1]]),
-        jnp.stack([rot[1, 0] - rot[0, 1], rot[0, 2] + rot[2, 0], rot[1, 2] + rot[2, 1], 1 + 2 * rot[2, 2] - tr]),
-    ])
+    cands = jnp.stack(
+        [
+            jnp.stack([1 + tr, rot[2, 1] - rot[1, 2], rot[0, 2] - rot[2, 0], rot[1, 0] - rot[0, 1]]),
+            jnp.stack([rot[2, 1] - rot[1, 2], 1 + 2 * rot[0, 0] - tr, rot[0, 1] + rot[1, 0], rot[0, 2] + rot[2, 0]]),
+            jnp.stack([rot[0, 2] - rot[2, 0], rot[0, 1] + rot[1, 0], 1 + 2 * rot[1, 1] - tr, rot[1, 2] + rot[2, 1]]),
+            jnp.stack([rot[1, 0] - rot[0, 1], rot[0, 2] + rot[2, 0], rot[1, 2] + rot[2, 1], 1 + 2 * rot[2, 2] - tr]),
+        ]
+    )
     best = jnp.argmax(jnp.stack([tr, rot[0, 0], rot[1, 1], rot[2, 2]]))
     q = cands[best]
     return q / jnp.linalg.norm(q) * jnp.sign(jnp.where(q[0] == 0, 1.0, q[0]))
@@ -82,11 +86,13 @@ def _quat_from_rotation(rot: jax.Array) -> jax.Array:
 
 def _rotation_from_quat(q: jax.Array) -> jax.Array:
     w, x, y, z = q / jnp.linalg.norm(q)
-    return jnp.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ])
+    return jnp.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def to_mjx_state(x: jax.Array) -> jax.Array:

@@ -36,10 +36,10 @@ def helicopter_mjcf(params: HelicopterParams | None = None, timestep: float = 1e
     <body name="arm">
       <joint name="travel" type="hinge" axis="0 0 1" damping="{b_travel!r}"/>
       <joint name="elevation" type="hinge" axis="0 -1 0" damping="{b_elev!r}"/>
-      <inertial pos="{-d['lw']!r} 0 0" mass="{float(p.m_w)!r}" diaginertia="{eps!r} {d['j_arm']!r} {d['j_arm']!r}"/>
+      <inertial pos="{-d["lw"]!r} 0 0" mass="{float(p.m_w)!r}" diaginertia="{eps!r} {d["j_arm"]!r} {d["j_arm"]!r}"/>
       <body name="helicopter" pos="{la!r} 0 0">
         <joint name="pitch" type="hinge" axis="1 0 0" damping="{b_pitch!r}"/>
-        <inertial pos="0 0 {-float(p.hp)!r}" mass="{d['m_h']!r}" diaginertia="{body_i!r} {eps!r} {body_i!r}"/>
+        <inertial pos="0 0 {-float(p.hp)!r}" mass="{d["m_h"]!r}" diaginertia="{body_i!r} {eps!r} {body_i!r}"/>
         <site name="rotor_front" pos="0 {lh!r} 0"/>
         <site name="rotor_back" pos="0 {-lh!r} 0"/>
       </body>
@@ -61,11 +61,13 @@ def _thrusts(p: HelicopterParams, x_rigid: jax.Array, thrust: jax.Array, u: jax.
     return thrust
 
 
-def helicopter_mjx_plant(params: HelicopterParams | None = None, field: str = "forward",
-                         timestep: float = 1e-3) -> Plant:
+def helicopter_mjx_plant(
+    params: HelicopterParams | None = None, field: str = "forward", timestep: float = 1e-3
+) -> Plant:
     """The 3-DOF helicopter with MJX rigid-body physics (8 states in the ODE's order, 2 voltages in,
     outputs ``(travel, elevation, pitch)``)."""
     p = HelicopterParams() if params is None else params
     rigid = mjcf_params(helicopter_mjcf(p, timestep), outputs=heli.OUTPUT_NAMES)
-    return actuated_plant(rigid, p, _motor_states, _thrusts, n_actuator_states=2, n_inputs=2,
-                          field=field, name="helicopter_3dof_mjx")
+    return actuated_plant(
+        rigid, p, _motor_states, _thrusts, n_actuator_states=2, n_inputs=2, field=field, name="helicopter_3dof_mjx"
+    )

@@ -71,7 +71,7 @@ def check_state(lay: Layout, x: jax.Array) -> None:
 
 def split_state(lay: Layout, x: jax.Array) -> tuple[jax.Array, jax.Array]:
     """``x → (qpos (nq,), qvel (nv,))``."""
-    return x[: lay.nq], x[lay.nq:]
+    return x[: lay.nq], x[lay.nq :]
 
 
 def to_data(params: MJCFParams, x: jax.Array, u: jax.Array, t: Any = 0.0) -> Any:
@@ -81,8 +81,12 @@ def to_data(params: MJCFParams, x: jax.Array, u: jax.Array, t: Any = 0.0) -> Any
     check_control(lay, u)
     qpos, qvel = split_state(lay, x)
     d = params.data
-    return d.replace(qpos=qpos.astype(d.qpos.dtype), qvel=qvel.astype(d.qvel.dtype),
-                     ctrl=jnp.asarray(u, d.ctrl.dtype), time=jnp.asarray(t, d.qpos.dtype))
+    return d.replace(
+        qpos=qpos.astype(d.qpos.dtype),
+        qvel=qvel.astype(d.qvel.dtype),
+        ctrl=jnp.asarray(u, d.ctrl.dtype),
+        time=jnp.asarray(t, d.qpos.dtype),
+    )
 
 
 def _quat_rate(q: jax.Array, omega: jax.Array) -> jax.Array:
@@ -98,11 +102,11 @@ def qpos_rate(lay: Layout, qpos: jax.Array, qvel: jax.Array) -> jax.Array:
     parts = []
     for jtype, qa, va in lay.joints:
         if jtype == _FREE:  # world-frame linear velocity, body-frame angular velocity
-            parts += [qvel[va:va + 3], _quat_rate(qpos[qa + 3:qa + 7], qvel[va + 3:va + 6])]
+            parts += [qvel[va : va + 3], _quat_rate(qpos[qa + 3 : qa + 7], qvel[va + 3 : va + 6])]
         elif jtype == _BALL:
-            parts.append(_quat_rate(qpos[qa:qa + 4], qvel[va:va + 3]))
+            parts.append(_quat_rate(qpos[qa : qa + 4], qvel[va : va + 3]))
         else:
-            parts.append(qvel[va:va + 1])
+            parts.append(qvel[va : va + 1])
     return jnp.concatenate(parts)
 
 
@@ -121,7 +125,9 @@ def step(params: MJCFParams, x: jax.Array, u: jax.Array, t: Any = 0.0) -> jax.Ar
 
 def step_field(params: MJCFParams, x: jax.Array, u: jax.Array, t: Any = 0.0) -> jax.Array:
     """``(step(x, u) − x)/h``: Euler with ``dt = h`` reproduces ``mjx.step`` exactly."""
-    return (step(params, x, u, t) - x) / params.model.opt.timestep  # a leaf: models differing only in h share compiled code
+    return (
+        step(params, x, u, t) - x
+    ) / params.model.opt.timestep  # a leaf: models differing only in h share compiled code
 
 
 _FIELD_FUNCTIONS = {"forward": forward_field, "step": step_field}
@@ -141,7 +147,7 @@ def output(params: MJCFParams, x: jax.Array) -> jax.Array:
     if lay.needs_forward:
         d = mjx.forward(params.model, to_data(params, x, jnp.zeros(lay.nu, x.dtype)))
         sensordata = d.sensordata.astype(x.dtype)
-    parts = [x[a:a + w] if kind == "state" else sensordata[a:a + w] for kind, a, w in lay.outputs]
+    parts = [x[a : a + w] if kind == "state" else sensordata[a : a + w] for kind, a, w in lay.outputs]
     return jnp.concatenate(parts)
 
 
@@ -167,8 +173,7 @@ def mjcf_plant(
     dyn = rigid_field(field)
     params = mjcf_params(source, outputs)
     lay = params.layout
-    return Plant(params, dyn, output, n_states=lay.n_states, n_inputs=lay.nu,
-                 n_outputs=lay.n_outputs, name=name)
+    return Plant(params, dyn, output, n_states=lay.n_states, n_inputs=lay.nu, n_outputs=lay.n_outputs, name=name)
 
 
 def step_sequence(params: MJCFParams, x0: jax.Array, controls: jax.Array) -> jax.Array:

@@ -22,9 +22,9 @@ one to the other (it is its own inverse).
 
 from __future__ import annotations
 
-import numpy as np
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from jaxsim.core.system import Plant
 from jaxsim.mjx.actuated import actuated_plant
@@ -85,5 +85,6 @@ def trms_mjx_plant(params: TRMSParams | None = None, field: str = "forward", tim
     outputs ``(pitch, yaw)`` as in the ODE plant."""
     p = trms.FEEDBACK_MANUFACTURER if params is None else params
     rigid = mjcf_params(trms_mjcf(p, timestep), outputs=("pitch", "yaw"))
-    return actuated_plant(rigid, p, _actuator_states, _actuator_torques, n_actuator_states=3,
-                          n_inputs=2, field=field, name="trms_mjx")
+    return actuated_plant(
+        rigid, p, _actuator_states, _actuator_torques, n_actuator_states=3, n_inputs=2, field=field, name="trms_mjx"
+    )

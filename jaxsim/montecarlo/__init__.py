@@ -30,17 +30,51 @@ from jaxsim.montecarlo.distributions import (
 from jaxsim.montecarlo.engine import SweepResult, as_key, monte_carlo, resolve_devices, sweep
 from jaxsim.montecarlo.events import wilson_interval
 from jaxsim.montecarlo.kernel import run_one
-from jaxsim.montecarlo.plots import plot_distribution, plot_sweep
 from jaxsim.montecarlo.moments import Moments, PairwiseMerge, block_moments, merge_moments, moments_of, pairwise_sum
+from jaxsim.montecarlo.plots import plot_distribution, plot_sweep
 from jaxsim.montecarlo.result import EventStats, MetricStats, MonteCarloResult, RawRuns
 from jaxsim.montecarlo.sketch import QuantileSketch, quantile_error_bound, sketch_quantile
 
 __all__ = [
-    "Design", "grid", "latin_hypercube", "parse_range", "points", "single_point", "sobol",
-    "Deviation", "Distribution", "LogNormal", "Normal", "TruncatedNormal", "Uniform",
-    "deviation", "draw", "lognormal", "normal", "truncated_normal", "uniform",
-    "SweepResult", "as_key", "monte_carlo", "resolve_devices", "sweep", "wilson_interval", "run_one",
-    "Moments", "PairwiseMerge", "block_moments", "merge_moments", "moments_of", "pairwise_sum",
-    "EventStats", "MetricStats", "MonteCarloResult", "RawRuns",
-    "QuantileSketch", "quantile_error_bound", "sketch_quantile", "plot_distribution", "plot_sweep",
+    "Design",
+    "grid",
+    "latin_hypercube",
+    "parse_range",
+    "points",
+    "single_point",
+    "sobol",
+    "Deviation",
+    "Distribution",
+    "LogNormal",
+    "Normal",
+    "TruncatedNormal",
+    "Uniform",
+    "deviation",
+    "draw",
+    "lognormal",
+    "normal",
+    "truncated_normal",
+    "uniform",
+    "SweepResult",
+    "as_key",
+    "monte_carlo",
+    "resolve_devices",
+    "sweep",
+    "wilson_interval",
+    "run_one",
+    "Moments",
+    "PairwiseMerge",
+    "block_moments",
+    "merge_moments",
+    "moments_of",
+    "pairwise_sum",
+    "EventStats",
+    "MetricStats",
+    "MonteCarloResult",
+    "RawRuns",
+    "QuantileSketch",
+    "quantile_error_bound",
+    "sketch_quantile",
+    "plot_distribution",
+    "plot_sweep",
 ]

@@ -19,7 +19,8 @@ The lower-case factories (:func:`normal`, :func:`uniform`, :func:`lognormal`,
 :func:`truncated_normal`, :func:`deviation`) validate their arguments and raise ``ValueError``
 naming the one at fault (``Normal.std: must be positive ...``); the classes themselves do not
 validate (they are pytrees, rebuilt on every unflatten), but :func:`validate_space` — called by the
-Monte-Carlo entry points — checks every distribution of a space before anything runs.  Each leaf of a space draws from its own key,
+Monte-Carlo entry points — checks every distribution of a space before anything runs.  Each leaf of a space draws
+from its own key,
 ``fold_in(key, crc32(path))`` with ``path`` the leaf's pytree path, so adding or removing a
 parameter never changes the draws of the others.
 """
@@ -98,8 +99,13 @@ class Uniform(Distribution):
 
     def validate(self) -> None:
         _finite("Uniform", low=self.low, high=self.high)
-        _check("Uniform", "high", self.high, np.asarray(self.high) > np.asarray(self.low),
-               f"greater than low={np.asarray(self.low).tolist()!r}")
+        _check(
+            "Uniform",
+            "high",
+            self.high,
+            np.asarray(self.high) > np.asarray(self.low),
+            f"greater than low={np.asarray(self.low).tolist()!r}",
+        )
 
     def sample(self, key: jax.Array) -> jax.Array:
         return jax.random.uniform(key, self.shape, _dtype(), self.low, self.high)
@@ -227,8 +233,7 @@ class TruncatedNormal(Distribution):
         if is_concrete((self.low, self.high)):
             lo, hi = np.asarray(self.low, float), np.asarray(self.high, float)
             _check("TruncatedNormal", "low", self.low, ~np.isnan(lo), "a number")
-            _check("TruncatedNormal", "high", self.high, hi > lo,
-                   f"greater than low={lo.tolist()!r}")
+            _check("TruncatedNormal", "high", self.high, hi > lo, f"greater than low={lo.tolist()!r}")
 
     def sample(self, key: jax.Array) -> jax.Array:
         a = _standardise(self.low, self.mean, self.std)
@@ -239,7 +244,7 @@ class TruncatedNormal(Distribution):
 
 @pytree_dataclass
 class Deviation(Distribution):
-    """"Nominal ± Δ": uniform on ``nominal ± delta`` or, with ``relative=True``, ``nominal·(1 ± delta)``.
+    """ "Nominal ± Δ": uniform on ``nominal ± delta`` or, with ``relative=True``, ``nominal·(1 ± delta)``.
 
     ``delta ≥ 0`` (``delta = 0`` gives the nominal value); relative deviations need ``delta < 1``
     so the sign of the parameter cannot flip.  ``relative`` must be a Python bool.
@@ -255,8 +260,13 @@ class Deviation(Distribution):
         _finite("Deviation", nominal=self.nominal, delta=self.delta)
         _check("Deviation", "delta", self.delta, np.asarray(self.delta) >= 0, "non-negative")
         if self.relative:
-            _check("Deviation", "delta", self.delta, np.asarray(self.delta) < 1,
-                   "below 1 for a relative deviation (a fraction: 0.2 means ±20 %)")
+            _check(
+                "Deviation",
+                "delta",
+                self.delta,
+                np.asarray(self.delta) < 1,
+                "below 1 for a relative deviation (a fraction: 0.2 means ±20 %)",
+            )
 
     def sample(self, key: jax.Array) -> jax.Array:
         u = jax.random.uniform(key, self.shape, _dtype(), -1.0, 1.0)
@@ -270,7 +280,6 @@ class Deviation(Distribution):
     @property
     def high(self) -> Any:
         return self.nominal + (self.delta * np.abs(self.nominal) if bool(self.relative) else self.delta)
-
 
 
 def is_distribution(x: Any) -> bool:
@@ -287,6 +296,7 @@ def draw(space: Any, key: jax.Array) -> Any:
 
     Pure and vmappable over ``key``.  Fixed leaves are returned as arrays.
     """
+
     def one(path: Any, leaf: Any) -> Any:
         if is_distribution(leaf):
             return leaf.sample(_leaf_key(key, path))
@@ -297,6 +307,7 @@ def draw(space: Any, key: jax.Array) -> Any:
 
 def describe_space(space: Any) -> Any:
     """JSON-friendly description of a space (distributions as dicts, fixed values as lists)."""
+
     def one(leaf: Any) -> Any:
         return leaf.describe() if is_distribution(leaf) else np.asarray(leaf).tolist()
 
@@ -311,8 +322,9 @@ def validate_space(space: Any) -> None:
             continue
         arr = np.asarray(leaf)
         if arr.dtype.kind not in "biuf" or (arr.dtype.kind == "f" and not np.all(np.isfinite(arr))):
-            raise ValueError(f"space{jax.tree_util.keystr(path)}: must be a finite number or a "
-                             f"distribution, got {leaf!r}")
+            raise ValueError(
+                f"space{jax.tree_util.keystr(path)}: must be a finite number or a distribution, got {leaf!r}"
+            )
 
 
 def _made(dist: Distribution) -> Any:

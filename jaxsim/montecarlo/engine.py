@@ -29,7 +29,8 @@ from typing import Any, Callable
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax.sharding import Mesh, PartitionSpec as P
+from jax.sharding import Mesh
+from jax.sharding import PartitionSpec as P
 
 from jaxsim.core.progress import progress_bar
 from jaxsim.core.validation import check_int
@@ -114,8 +115,10 @@ def _check_design(design: Design, space: Any) -> None:
         raise ValueError("space: must be a dict of named parameters when a design sets parameters")
     for name in design.names:
         if name not in space:  # it would be added to every draw, read by nobody: identical points
-            raise ValueError(f"design: parameter {name!r} is not in the space; the space's parameters: "
-                             f"{', '.join(sorted(map(str, space)))}")
+            raise ValueError(
+                f"design: parameter {name!r} is not in the space; the space's parameters: "
+                f"{', '.join(sorted(map(str, space)))}"
+            )
         if is_distribution(space.get(name)):
             raise ValueError(f"{name}: is drawn from a distribution in space; a sweep cannot also set it")
 
@@ -175,10 +178,12 @@ class _PointAccumulator:
         if self.numeric:
             n_blocks = chunk[f"count/{self.numeric[0]}"].shape[0]
             for j in range(n_blocks):
-                self.moments.push({
-                    name: Moments(chunk[f"count/{name}"][j], chunk[f"mean/{name}"][j], chunk[f"m2/{name}"][j])
-                    for name in self.numeric
-                })
+                self.moments.push(
+                    {
+                        name: Moments(chunk[f"count/{name}"][j], chunk[f"mean/{name}"][j], chunk[f"m2/{name}"][j])
+                        for name in self.numeric
+                    }
+                )
         for k, v in chunk.items():
             kind = k.split("/", 1)[0]
             if kind in _PER_BLOCK:
@@ -201,9 +206,14 @@ class _PointAccumulator:
                 out[lf.name] = EventStats(self.totals[f"events/{lf.name}"], runs)
             else:
                 hist = self.totals.get(f"hist/{lf.name}")
-                out[lf.name] = MetricStats(merged[lf.name], self.totals[f"nonfinite/{lf.name}"],
-                                           self.totals[f"min/{lf.name}"], self.totals[f"max/{lf.name}"],
-                                           hist, self.sketch if hist is not None else None)
+                out[lf.name] = MetricStats(
+                    merged[lf.name],
+                    self.totals[f"nonfinite/{lf.name}"],
+                    self.totals[f"min/{lf.name}"],
+                    self.totals[f"max/{lf.name}"],
+                    hist,
+                    self.sketch if hist is not None else None,
+                )
         return runs, out
 
 
@@ -249,11 +259,27 @@ class _Chunking:
 _KERNELS: dict[Any, Any] = {}
 
 
-def _kernel(fn: Callable, space: Any, names: tuple[str, ...], leaves: list[Leaf], block_size: int,
-            blocks: int, sketch: QuantileSketch | None, devices: list) -> tuple[Callable, Mesh]:
+def _kernel(
+    fn: Callable,
+    space: Any,
+    names: tuple[str, ...],
+    leaves: list[Leaf],
+    block_size: int,
+    blocks: int,
+    sketch: QuantileSketch | None,
+    devices: list,
+) -> tuple[Callable, Mesh]:
     """The jitted chunk kernel and its mesh, cached per (fn, shapes, layout, devices)."""
-    cache_key = (fn, jax.tree_util.tree_structure(space), names, tuple(leaves), block_size, blocks,
-                 sketch, tuple(devices))
+    cache_key = (
+        fn,
+        jax.tree_util.tree_structure(space),
+        names,
+        tuple(leaves),
+        block_size,
+        blocks,
+        sketch,
+        tuple(devices),
+    )
     try:
         hit = _KERNELS.get(cache_key)
     except TypeError:  # unhashable fn or static metadata: no caching
@@ -270,9 +296,18 @@ class _ChunkSource:
     """Gives every chunk's data: from the checkpoint folder when it holds a valid copy, else computed
     (and saved).  Multi-process: process 0 alone touches the folder and broadcasts what it read."""
 
-    def __init__(self, kernel: Callable, mesh: Mesh, chunking: _Chunking, leaves: list[Leaf],
-                 sketch: QuantileSketch | None, store: ChunkStore | None, n_points: int,
-                 key_data: np.ndarray, space: Any):
+    def __init__(
+        self,
+        kernel: Callable,
+        mesh: Mesh,
+        chunking: _Chunking,
+        leaves: list[Leaf],
+        sketch: QuantileSketch | None,
+        store: ChunkStore | None,
+        n_points: int,
+        key_data: np.ndarray,
+        space: Any,
+    ):
         self.kernel, self.mesh, self.chunking, self.leaves, self.sketch = kernel, mesh, chunking, leaves, sketch
         self.store = store
         self.multi = jax.process_count() > 1
@@ -330,7 +365,7 @@ def sweep(
     *,
     block_size: int = 1000,
     chunk_size: int | None = None,
-    sketch: QuantileSketch | None = QuantileSketch(),
+    sketch: QuantileSketch | None = QuantileSketch(),  # noqa: B008  (an immutable default)
     keep_runs: int = 0,
     devices: Any = None,
     out: str | Path | None = None,
@@ -394,10 +429,16 @@ def sweep(
     leaves, treedef = metric_layout(out_shapes)
     fn_name = name or f"{getattr(fn, '__module__', '?')}.{getattr(fn, '__qualname__', repr(fn))}"
     description = {
-        "format": 1, "name": fn_name, "computation": jaxpr_hash(jaxpr), "extra": extra,
+        "format": 1,
+        "name": fn_name,
+        "computation": jaxpr_hash(jaxpr),
+        "extra": extra,
         "space": describe_space(space),
-        "design": design.describe(), "n": n, "key": key_data.tolist(),
-        "key_impl": str(jax.random.key_impl(key)), "block_size": block_size,
+        "design": design.describe(),
+        "n": n,
+        "key": key_data.tolist(),
+        "key_impl": str(jax.random.key_impl(key)),
+        "block_size": block_size,
         "sketch": None if sketch is None else sketch.describe(),
         "x64": bool(jax.config.jax_enable_x64),
         "metrics": [[lf.name, list(lf.shape), lf.kind] for lf in leaves],
@@ -413,8 +454,14 @@ def sweep(
     source = _ChunkSource(kernel, mesh, chunking, leaves, sketch, store, len(design), key_data, space)
 
     initial = int(sum(chunking.runs(c) for _, c in zip(*np.nonzero(source.done))))
-    bar = progress_bar(progress if main else None, total=len(design) * n, initial=initial, unit="run",
-                       unit_scale=True, desc=fn_name.rsplit(".", 1)[-1])
+    bar = progress_bar(
+        progress if main else None,
+        total=len(design) * n,
+        initial=initial,
+        unit="run",
+        unit_scale=True,
+        desc=fn_name.rsplit(".", 1)[-1],
+    )
     results = []
     try:
         for p in range(len(design)):
@@ -436,15 +483,27 @@ def sweep(
             runs, by_name = acc.stats()
             raw = _raw_runs(fn, space, point, key, keep_runs) if keep_runs else None
             rejected = sum(1 for f, _ in (store.rejected if store else []) if f.startswith(f"p{p:05d}_"))
-            results.append(MonteCarloResult(
-                runs=runs, by_name=by_name, treedef=treedef, point=point, raw=raw,
-                chunks_computed=computed, runs_computed=runs_computed, chunks_loaded=loaded,
-                chunks_rejected=rejected, devices=len(devices), processes=jax.process_count(),
-                wall_s=time.perf_counter() - start))
+            results.append(
+                MonteCarloResult(
+                    runs=runs,
+                    by_name=by_name,
+                    treedef=treedef,
+                    point=point,
+                    raw=raw,
+                    chunks_computed=computed,
+                    runs_computed=runs_computed,
+                    chunks_loaded=loaded,
+                    chunks_rejected=rejected,
+                    devices=len(devices),
+                    processes=jax.process_count(),
+                    wall_s=time.perf_counter() - start,
+                )
+            )
     finally:
         bar.close()
-    return SweepResult(design, results, fingerprint, Path(out) if out is not None else None,
-                       list(store.rejected) if store else [])
+    return SweepResult(
+        design, results, fingerprint, Path(out) if out is not None else None, list(store.rejected) if store else []
+    )
 
 
 def monte_carlo(fn: Callable[[jax.Array, Any], Any], space: Any, n: int, key: Any, **kwargs: Any) -> MonteCarloResult:
@@ -455,8 +514,9 @@ def monte_carlo(fn: Callable[[jax.Array, Any], Any], space: Any, n: int, key: An
     return sweep(fn, space, single_point(), n, key, **kwargs).points[0]
 
 
-def _resolve_chunk_size(chunk_size: int | None, out: str | Path | None, fingerprint: str, n: int,
-                        block_size: int) -> int:
+def _resolve_chunk_size(
+    chunk_size: int | None, out: str | Path | None, fingerprint: str, n: int, block_size: int
+) -> int:
     if chunk_size is None:  # the folder's layout if it holds this sweep, else min(100k, n)
         chunk_size = _stored_chunk_size(out, fingerprint) or min(DEFAULT_CHUNK, n)
         chunk_size = math.ceil(chunk_size / block_size) * block_size
@@ -495,7 +555,9 @@ def _raw_runs(fn: Callable, space: Any, point: dict[str, float], key: jax.Array,
         jitted = _RAW.setdefault((fn, names), jax.jit(many))
     except TypeError:
         jitted = jax.jit(many)
-    params, metrics = jitted(key, space, {k_: jnp.asarray(v) for k_, v in point.items()},
-                             jnp.arange(k, dtype=jnp.result_type(int)))
-    return RawRuns(np.arange(k), jax.tree_util.tree_map(np.asarray, params),
-                   jax.tree_util.tree_map(np.asarray, metrics))
+    params, metrics = jitted(
+        key, space, {k_: jnp.asarray(v) for k_, v in point.items()}, jnp.arange(k, dtype=jnp.result_type(int))
+    )
+    return RawRuns(
+        np.arange(k), jax.tree_util.tree_map(np.asarray, params), jax.tree_util.tree_map(np.asarray, metrics)
+    )

@@ -98,7 +98,7 @@ def _jaxpr(h: _Hasher, jaxpr: jcore.Jaxpr, consts: Any) -> None:
     for v, c in zip(jaxpr.constvars, consts):
         var(v)
         h.array(c)
-    for v in jaxpr.constvars[len(consts):]:  # an open jaxpr's constants: positions only
+    for v in jaxpr.constvars[len(consts) :]:  # an open jaxpr's constants: positions only
         var(v)
     for v in jaxpr.invars:
         var(v)

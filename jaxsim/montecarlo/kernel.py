@@ -24,7 +24,8 @@ from typing import Any, Callable
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
+from jax.sharding import Mesh, NamedSharding
+from jax.sharding import PartitionSpec as P
 
 from jaxsim.montecarlo.distributions import draw
 from jaxsim.montecarlo.moments import block_moments
@@ -52,8 +53,9 @@ def leaf_name(path: tuple[Any, ...]) -> str:
     return "/".join(parts) or "value"
 
 
-def run_one(fn: Callable[[jax.Array, Any], Any], space: Any, point: dict[str, Any], key: jax.Array,
-            index: jax.Array) -> tuple[Any, Any]:
+def run_one(
+    fn: Callable[[jax.Array, Any], Any], space: Any, point: dict[str, Any], key: jax.Array, index: jax.Array
+) -> tuple[Any, Any]:
     """``(params, metrics)`` of run ``index`` (see module docstring for the key derivation)."""
     k = jax.random.fold_in(key, index.astype(jnp.uint32))
     params = draw(space, jax.random.fold_in(k, 0))
@@ -89,8 +91,10 @@ def metric_layout(out: Any) -> tuple[list[Leaf], Any]:
         elif kind in "iuf":
             leaves.append(Leaf(name, tuple(sds.shape), "numeric"))
         else:
-            raise ValueError(f"fn: metric {name!r} has dtype {sds.dtype}; metrics must be real "
-                             "numbers (statistics) or booleans (events)")
+            raise ValueError(
+                f"fn: metric {name!r} has dtype {sds.dtype}; metrics must be real "
+                "numbers (statistics) or booleans (events)"
+            )
     return leaves, treedef
 
 
@@ -99,7 +103,11 @@ def _expand(mask: jax.Array, ndim: int) -> jax.Array:
 
 
 def build_chunk_kernel(
-    fn: Callable, leaves: list[Leaf], block_size: int, sketch: QuantileSketch | None, mesh: Mesh,
+    fn: Callable,
+    leaves: list[Leaf],
+    block_size: int,
+    sketch: QuantileSketch | None,
+    mesh: Mesh,
 ) -> Callable:
     """``kernel(key_data, n, point, space, block_ids) -> (per_block, per_device)`` (jitted).
 
@@ -174,7 +182,8 @@ def build_chunk_kernel(
         return per_block, {k: v[None] for k, v in carry.items()}
 
     sharded = jax.shard_map(
-        per_device, mesh=mesh,
+        per_device,
+        mesh=mesh,
         in_specs=(P(), P(), P(), P(), P("d")),
         out_specs=(P("d"), P("d")),
         check_vma=False,

@@ -58,8 +58,11 @@ def plot_distribution(result: MonteCarloResult, levels: int = 199) -> Any:
     """Empirical quantile function (from the sketch) of every scalar numeric metric of one point."""
     import matplotlib.pyplot as plt
 
-    names = [k for k in _scalar_names(result)
-             if isinstance(result.by_name[k], MetricStats) and result.by_name[k].bucket_counts is not None]
+    names = [
+        k
+        for k in _scalar_names(result)
+        if isinstance(result.by_name[k], MetricStats) and result.by_name[k].bucket_counts is not None
+    ]
     fig, axes = plt.subplots(1, max(1, len(names)), figsize=(4.2 * max(1, len(names)), 3.4), squeeze=False)
     q = np.linspace(0.0, 1.0, levels + 2)[1:-1]
     for ax, name in zip(axes[0], names):

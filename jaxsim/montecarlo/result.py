@@ -56,8 +56,14 @@ class MetricStats:
         return quantile_error_bound(self.sketch, self.quantile(q))
 
     def arrays(self) -> dict[str, np.ndarray]:
-        out = {"count": self.count, "nonfinite": np.asarray(self.nonfinite), "mean": np.asarray(self.moments.mean),
-               "m2": np.asarray(self.moments.m2), "min": np.asarray(self.minimum), "max": np.asarray(self.maximum)}
+        out = {
+            "count": self.count,
+            "nonfinite": np.asarray(self.nonfinite),
+            "mean": np.asarray(self.moments.mean),
+            "m2": np.asarray(self.moments.m2),
+            "min": np.asarray(self.minimum),
+            "max": np.asarray(self.maximum),
+        }
         if self.bucket_counts is not None:
             out["buckets"] = np.asarray(self.bucket_counts)
         return out
@@ -99,7 +105,8 @@ class MonteCarloResult:
     ``stats``: same pytree structure as ``fn``'s output, leaves :class:`MetricStats` /
     :class:`EventStats`; ``by_name``: the same leaves keyed by path (``"itae"``, ``"pos/0"``).
     ``point``: the sweep point's parameter values.  Bookkeeping: ``chunks_computed``,
-    ``runs_computed`` (in those chunks, padding excluded), ``chunks_loaded`` (from a checkpoint folder), ``chunks_rejected`` (damaged files recomputed),
+    ``runs_computed`` (in those chunks, padding excluded), ``chunks_loaded`` (from a checkpoint folder),
+    ``chunks_rejected`` (damaged files recomputed),
     ``devices``, ``processes``, ``wall_s``.
     """
 
@@ -131,8 +138,9 @@ class MonteCarloResult:
                 out[f"{name}:{k}"] = v
         return out
 
-    def row(self, quantiles: tuple[float, ...] = (0.05, 0.5, 0.95), confidence: float = 0.95,
-            max_elements: int = 8) -> dict[str, Any]:
+    def row(
+        self, quantiles: tuple[float, ...] = (0.05, 0.5, 0.95), confidence: float = 0.95, max_elements: int = 8
+    ) -> dict[str, Any]:
         """One flat table row: point values, then per metric element mean/std/min/max/quantiles
         (numeric) or probability and Wilson bounds (event).  Metrics with more than
         ``max_elements`` elements are left out of the row (see ``by_name``)."""

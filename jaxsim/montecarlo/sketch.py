@@ -43,8 +43,7 @@ class QuantileSketch:
         if not (math.isfinite(self.min_abs) and self.min_abs > 0):
             raise ValueError(f"min_abs: must be finite and positive, got {self.min_abs!r}")
         if not (math.isfinite(self.max_abs) and self.max_abs > self.min_abs):
-            raise ValueError(f"max_abs: must be finite and greater than min_abs={self.min_abs!r}, "
-                             f"got {self.max_abs!r}")
+            raise ValueError(f"max_abs: must be finite and greater than min_abs={self.min_abs!r}, got {self.max_abs!r}")
 
     @property
     def gamma(self) -> float:
@@ -78,13 +77,19 @@ class QuantileSketch:
         return np.concatenate([[-np.inf], -mags[::-1], [0.0], mags, [np.inf]])
 
     def describe(self) -> dict[str, float]:
-        return {"rel_accuracy": float(self.rel_accuracy), "min_abs": float(self.min_abs),
-                "max_abs": float(self.max_abs)}
+        return {
+            "rel_accuracy": float(self.rel_accuracy),
+            "min_abs": float(self.min_abs),
+            "max_abs": float(self.max_abs),
+        }
 
 
 def sketch_quantile(
-    sketch: QuantileSketch, counts: np.ndarray, q: float | np.ndarray,
-    minimum: np.ndarray, maximum: np.ndarray,
+    sketch: QuantileSketch,
+    counts: np.ndarray,
+    q: float | np.ndarray,
+    minimum: np.ndarray,
+    maximum: np.ndarray,
 ) -> np.ndarray:
     """Quantile(s) ``q ∈ [0, 1]`` from bucket ``counts`` (shape ``(n_bins, *shape)``).
 

@@ -84,8 +84,8 @@ def decode_chunk(data: bytes) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """Inverse of :func:`encode_chunk`; raises ``ValueError`` on any damage."""
     if len(data) < _HEADER or data[: len(MAGIC)] != MAGIC:
         raise ValueError("not a chunk file (bad magic or too short)")
-    digest = data[len(MAGIC): len(MAGIC) + 32]
-    (length,) = struct.unpack("<Q", data[len(MAGIC) + 32: _HEADER])
+    digest = data[len(MAGIC) : len(MAGIC) + 32]
+    (length,) = struct.unpack("<Q", data[len(MAGIC) + 32 : _HEADER])
     payload = data[_HEADER:]
     if len(payload) != length:
         raise ValueError(f"truncated: {len(payload)} of {length} payload bytes")
@@ -97,27 +97,31 @@ def decode_chunk(data: bytes) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     return arrays, meta
 
 
-def _different_sweep(root: Path, manifest: dict[str, Any], fingerprint: str,
-                     description: dict[str, Any]) -> str:
+def _different_sweep(root: Path, manifest: dict[str, Any], fingerprint: str, description: dict[str, Any]) -> str:
     """Why ``root`` cannot be opened for this sweep: which parts of the description changed."""
     old = manifest.get("description") if isinstance(manifest.get("description"), dict) else {}
     new = json.loads(json.dumps(description, default=str))  # as the manifest stores it
     changed = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
     if changed == ["computation"]:
         was = str(old.get("computation"))[:12] if old.get("computation") else "not recorded"
-        return (f"out: the per-run computation changed since the chunks in {root} were written "
-                f"(computation hash {was} → {str(new['computation'])[:12]}); nothing was written — to run "
-                f"the new code, choose a new folder (without resume=True / --resume) or delete {root}")
-    return (f"out: {root} holds a different sweep (fingerprint {str(manifest.get('fingerprint'))[:12]}…, "
-            f"this sweep {fingerprint[:12]}…; differs in: {', '.join(changed) or 'format'}); "
-            "nothing was written — choose another folder or delete that one")
+        return (
+            f"out: the per-run computation changed since the chunks in {root} were written "
+            f"(computation hash {was} → {str(new['computation'])[:12]}); nothing was written — to run "
+            f"the new code, choose a new folder (without resume=True / --resume) or delete {root}"
+        )
+    return (
+        f"out: {root} holds a different sweep (fingerprint {str(manifest.get('fingerprint'))[:12]}…, "
+        f"this sweep {fingerprint[:12]}…; differs in: {', '.join(changed) or 'format'}); "
+        "nothing was written — choose another folder or delete that one"
+    )
 
 
 class ChunkStore:
     """The checkpoint folder of one sweep (see module docstring)."""
 
-    def __init__(self, root: str | Path, fingerprint: str, description: dict[str, Any],
-                 layout: dict[str, Any], resume: bool):
+    def __init__(
+        self, root: str | Path, fingerprint: str, description: dict[str, Any], layout: dict[str, Any], resume: bool
+    ):
         self.root = Path(root)
         self.fingerprint = fingerprint
         self.chunks_dir = self.root / CHUNKS
@@ -131,26 +135,30 @@ class ChunkStore:
             try:
                 manifest = json.loads(manifest_path.read_text())
             except (OSError, json.JSONDecodeError) as exc:
-                raise ValueError(f"out: {self.root}/manifest.json is unreadable ({exc}); "
-                                 "refusing to write into this folder") from None
+                raise ValueError(
+                    f"out: {self.root}/manifest.json is unreadable ({exc}); refusing to write into this folder"
+                ) from None
             if manifest.get("fingerprint") != self.fingerprint:
                 raise ValueError(_different_sweep(self.root, manifest, self.fingerprint, description))
             if manifest.get("layout") != layout:
                 raise ValueError(
                     f"chunk_size: {self.root} was written with layout {manifest.get('layout')}, "
-                    f"this run asks for {layout}; resume with the same chunk size")
+                    f"this run asks for {layout}; resume with the same chunk size"
+                )
             if not resume and self._chunk_files():
                 raise ValueError(
                     f"out: {self.root} already holds {len(self._chunk_files())} chunk(s) of this sweep; "
-                    "pass resume=True (CLI: --resume) to continue it, or choose another folder")
+                    "pass resume=True (CLI: --resume) to continue it, or choose another folder"
+                )
             self._remove_stale_temporaries()
             return
         if self.root.exists() and any(self.root.iterdir()):
-            raise ValueError(f"out: {self.root} exists, is not empty and has no manifest.json "
-                             "(not a sweep folder); refusing to write into it")
+            raise ValueError(
+                f"out: {self.root} exists, is not empty and has no manifest.json "
+                "(not a sweep folder); refusing to write into it"
+            )
         self.chunks_dir.mkdir(parents=True, exist_ok=True)
-        manifest = {"format": FORMAT, "fingerprint": self.fingerprint, "layout": layout,
-                    "description": description}
+        manifest = {"format": FORMAT, "fingerprint": self.fingerprint, "layout": layout, "description": description}
         atomic_write_bytes(manifest_path, (json.dumps(manifest, indent=1, default=str) + "\n").encode())
 
     def _chunk_files(self) -> list[Path]:

@@ -60,7 +60,8 @@ def _array(factory: Any) -> Any:
 class AUVParams:
     """Physical parameters (array leaves: vmap over them, differentiate through them).
 
-    M_R, M_A ``(6, 6)`` rigid-body and added inertia (kg, kg·m²); d1 ``(6,)`` (N·s/m, N·m·s); d2 ``(6,)`` (N·s²/m², N·m·s²);
+    M_R, M_A ``(6, 6)`` rigid-body and added inertia (kg, kg·m²); d1 ``(6,)`` (N·s/m, N·m·s); d2 ``(6,)`` (N·s²/m²,
+    N·m·s²);
     weight, buoyancy (N); r_g, r_b ``(3,)`` centres of gravity and buoyancy in body axes (m).
     """
 
@@ -112,10 +113,14 @@ def perturb(params: AUVParams, deviation: AUVDeviation, sign: float = 1.0) -> AU
     dm = jnp.asarray(deviation.mass)
     dm = jnp.diag(dm) if dm.ndim == 1 else dm
     return AUVParams(
-        M_R=params.M_R, M_A=jnp.asarray(params.M_A) + sign * dm,
+        M_R=params.M_R,
+        M_A=jnp.asarray(params.M_A) + sign * dm,
         d1=jnp.asarray(params.d1) + sign * jnp.asarray(deviation.d1),
         d2=jnp.asarray(params.d2) + sign * jnp.asarray(deviation.d2),
-        weight=params.weight, buoyancy=params.buoyancy, r_g=params.r_g, r_b=params.r_b,
+        weight=params.weight,
+        buoyancy=params.buoyancy,
+        r_g=params.r_g,
+        r_b=params.r_b,
     )
 
 
@@ -131,8 +136,9 @@ def true_params(sign: float = 1.0) -> AUVParams:
 
 def restoring(params: AUVParams, euler: jax.Array) -> jax.Array:
     """``g(η)`` ``(6,)`` for ``euler = [φ, θ, ψ]``."""
-    return marine.restoring_forces(euler, params.weight, params.buoyancy,
-                                   jnp.asarray(params.r_g), jnp.asarray(params.r_b))
+    return marine.restoring_forces(
+        euler, params.weight, params.buoyancy, jnp.asarray(params.r_g), jnp.asarray(params.r_b)
+    )
 
 
 def damping(params: AUVParams, nu: jax.Array) -> jax.Array:
@@ -169,7 +175,9 @@ def model(params: AUVParams) -> AUVModel:
 def acceleration(m: AUVModel, x: jax.Array, tau: jax.Array) -> jax.Array:
     """Body acceleration ``ν̇ = M⁻¹(τ − C(ν)ν − D(ν)ν − g(η))`` ``(6,)`` at state ``x`` under ``τ``."""
     p = m.params
-    rhs = marine.unbalanced_forces(p.mass_matrix, x[6:], tau, jnp.asarray(p.d1), jnp.asarray(p.d2), restoring(p, x[3:6]))
+    rhs = marine.unbalanced_forces(
+        p.mass_matrix, x[6:], tau, jnp.asarray(p.d1), jnp.asarray(p.d2), restoring(p, x[3:6])
+    )
     return m.mass_inverse @ rhs
 
 
@@ -185,15 +193,22 @@ def output(m: AUVModel, x: jax.Array) -> jax.Array:
 
 def inverse_dynamics(params: AUVParams, x: jax.Array, nu_r: jax.Array, nu_r_dot: jax.Array) -> jax.Array:
     """``M ν̇_r + C(ν) ν_r + D(ν) ν_r + g(η)`` with this model's parameters (computed torque)."""
-    return marine.inverse_dynamics(params.mass_matrix, jnp.asarray(params.d1), jnp.asarray(params.d2),
-                                   restoring(params, x[3:6]), x[6:], nu_r, nu_r_dot)
+    return marine.inverse_dynamics(
+        params.mass_matrix,
+        jnp.asarray(params.d1),
+        jnp.asarray(params.d2),
+        restoring(params, x[3:6]),
+        x[6:],
+        nu_r,
+        nu_r_dot,
+    )
 
 
 def energy(params: AUVParams, x: jax.Array) -> jax.Array:
     """Kinetic + potential energy (J), up to a constant."""
-    return (marine.kinetic_energy(params.mass_matrix, x[6:])
-            + marine.potential_energy(x[:6], params.weight, params.buoyancy,
-                                      jnp.asarray(params.r_g), jnp.asarray(params.r_b)))
+    return marine.kinetic_energy(params.mass_matrix, x[6:]) + marine.potential_energy(
+        x[:6], params.weight, params.buoyancy, jnp.asarray(params.r_g), jnp.asarray(params.r_b)
+    )
 
 
 def validate(params: AUVParams) -> None:

@@ -153,6 +153,11 @@ def camera_sensor(
     check_positive("yaw_std", yaw_std, allow_zero=True)
     lead = LeaderParams() if leader is None else leader
     check_finite("leader", lead)
-    params = CameraParams(lead, jnp.asarray(pos_std, dtype=float), jnp.asarray(yaw_std, dtype=float),
-                          float(camera_period), float(control_period))
+    params = CameraParams(
+        lead,
+        jnp.asarray(pos_std, dtype=float),
+        jnp.asarray(yaw_std, dtype=float),
+        float(camera_period),
+        float(control_period),
+    )
     return Sensor(params=params, measure=camera_measure, period=None, name="camera")

@@ -39,8 +39,16 @@ from jaxsim.core.pytree import pytree_dataclass
 from jaxsim.core.system import Plant
 from jaxsim.core.validation import check_positive, is_concrete
 
-STATE_NAMES = ("travel", "elevation", "pitch", "travel_rate", "elevation_rate", "pitch_rate",
-               "thrust_front", "thrust_back")
+STATE_NAMES = (
+    "travel",
+    "elevation",
+    "pitch",
+    "travel_rate",
+    "elevation_rate",
+    "pitch_rate",
+    "thrust_front",
+    "thrust_back",
+)
 INPUT_NAMES = ("v_front", "v_back")
 OUTPUT_NAMES = ("travel", "elevation", "pitch")
 GRAVITY = 9.81
@@ -76,8 +84,7 @@ def derived(p: HelicopterParams) -> dict[str, jax.Array]:
     lw = (m_h * p.la - p.la * p.fg / GRAVITY) / p.m_w
     j_arm = p.je - m_h * p.la**2 - p.m_w * lw**2
     # B = damping × axis inertia at rest: travel turns the arm and the pitch body (je + jp)
-    b = p.damping * jnp.stack([jnp.asarray(p.je + p.jp, float), jnp.asarray(p.je, float),
-                               jnp.asarray(p.jp, float)])
+    b = p.damping * jnp.stack([jnp.asarray(p.je + p.jp, float), jnp.asarray(p.je, float), jnp.asarray(p.jp, float)])
     return {"m_h": m_h, "lw": lw, "j_arm": j_arm, "b": b}
 
 
@@ -93,10 +100,16 @@ def body_pose(p: HelicopterParams, q: jax.Array) -> tuple[jax.Array, jax.Array]:
 def energies(p: HelicopterParams):
     """``(T(q, q̇), V(q))`` of arm + counterweight and the helicopter body."""
     d = derived(p)
-    t_arm, v_arm = body_energy(arm_pose, p.m_w, jnp.stack([-d["lw"], 0.0, 0.0]),
-                               jnp.stack([EPS_INERTIA, d["j_arm"], d["j_arm"]]), GRAVITY)
-    t_body, v_body = body_energy(lambda q: body_pose(p, q), d["m_h"], jnp.stack([0.0, 0.0, -p.hp]),
-                                 jnp.stack([d["m_h"] * p.lh**2, EPS_INERTIA, d["m_h"] * p.lh**2]), GRAVITY)
+    t_arm, v_arm = body_energy(
+        arm_pose, p.m_w, jnp.stack([-d["lw"], 0.0, 0.0]), jnp.stack([EPS_INERTIA, d["j_arm"], d["j_arm"]]), GRAVITY
+    )
+    t_body, v_body = body_energy(
+        lambda q: body_pose(p, q),
+        d["m_h"],
+        jnp.stack([0.0, 0.0, -p.hp]),
+        jnp.stack([d["m_h"] * p.lh**2, EPS_INERTIA, d["m_h"] * p.lh**2]),
+        GRAVITY,
+    )
     return (lambda q, qd: t_arm(q, qd) + t_body(q, qd)), (lambda q: v_arm(q) + v_body(q))
 
 
@@ -104,8 +117,9 @@ def thrust_forces(p: HelicopterParams, q: jax.Array, thrust: jax.Array) -> jax.A
     """Generalised forces ``(3,)`` of front/back thrusts ``(2,)`` (N) along the body ``z`` axis."""
     pose = lambda z: body_pose(p, z)  # noqa: E731
     up = jnp.array([0.0, 0.0, 1.0])
-    return (point_force(pose, jnp.stack([0.0, p.lh, 0.0]), thrust[0] * up, q)
-            + point_force(pose, jnp.stack([0.0, -p.lh, 0.0]), thrust[1] * up, q))
+    return point_force(pose, jnp.stack([0.0, p.lh, 0.0]), thrust[0] * up, q) + point_force(
+        pose, jnp.stack([0.0, -p.lh, 0.0]), thrust[1] * up, q
+    )
 
 
 def motor_derivatives(p: HelicopterParams, thrust: jax.Array, u: jax.Array) -> jax.Array:

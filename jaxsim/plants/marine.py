@@ -6,7 +6,8 @@ Conventions (Fossen, *Handbook of Marine Craft Hydrodynamics and Motion Control*
 * generalised position ``η = [x, y, z, φ, θ, ψ]`` (m, rad), body velocity
   ``ν = [u, v, w, p, q, r]`` (m/s, rad/s), generalised force ``τ = [X, Y, Z, K, M, N]`` (N, N·m);
 * attitude by zyx Euler angles: ``R(Θ) = R_z(ψ) R_y(θ) R_x(φ)`` maps body vectors to the absolute
-  frame (the rotations live in :mod:`jaxsim.core.rotations`, re-exported here), ``ṗ = R ν₁``, ``Θ̇ = T(Θ) ν₂`` (singular at ``θ = ±90°``); ``η̇ = J(η) ν``;
+  frame (the rotations live in :mod:`jaxsim.core.rotations`, re-exported here), ``ṗ = R ν₁``, ``Θ̇ = T(Θ) ν₂``
+  (singular at ``θ = ±90°``); ``η̇ = J(η) ν``;
 * dynamics ``M ν̇ + C(ν) ν + D(ν) ν + g(η) = τ`` with ``M = M_RB + M_A`` symmetric positive
   definite, ``C`` from ``M`` by Kirchhoff's equations (:func:`coriolis_from_mass`), ``D`` diagonal
   linear + quadratic damping and ``g`` the restoring forces of weight and buoyancy.
@@ -52,11 +53,13 @@ def euler_rate_matrix(euler: jax.Array) -> jax.Array:
     sphi, cphi = jnp.sin(euler[0]), jnp.cos(euler[0])
     ctheta, ttheta = jnp.cos(euler[1]), jnp.tan(euler[1])
     one, zero = jnp.ones_like(sphi), jnp.zeros_like(sphi)
-    return jnp.stack([
-        jnp.stack([one, sphi * ttheta, cphi * ttheta]),
-        jnp.stack([zero, cphi, -sphi]),
-        jnp.stack([zero, sphi / ctheta, cphi / ctheta]),
-    ])
+    return jnp.stack(
+        [
+            jnp.stack([one, sphi * ttheta, cphi * ttheta]),
+            jnp.stack([zero, cphi, -sphi]),
+            jnp.stack([zero, sphi / ctheta, cphi / ctheta]),
+        ]
+    )
 
 
 def euler_rate_matrix_inverse(euler: jax.Array) -> jax.Array:
@@ -64,11 +67,13 @@ def euler_rate_matrix_inverse(euler: jax.Array) -> jax.Array:
     sphi, cphi = jnp.sin(euler[0]), jnp.cos(euler[0])
     stheta, ctheta = jnp.sin(euler[1]), jnp.cos(euler[1])
     one, zero = jnp.ones_like(sphi), jnp.zeros_like(sphi)
-    return jnp.stack([
-        jnp.stack([one, zero, -stheta]),
-        jnp.stack([zero, cphi, ctheta * sphi]),
-        jnp.stack([zero, -sphi, ctheta * cphi]),
-    ])
+    return jnp.stack(
+        [
+            jnp.stack([one, zero, -stheta]),
+            jnp.stack([zero, cphi, ctheta * sphi]),
+            jnp.stack([zero, -sphi, ctheta * cphi]),
+        ]
+    )
 
 
 def kinematics_jacobian(eta: jax.Array) -> jax.Array:
@@ -107,9 +112,7 @@ def damping_matrix(d_linear: jax.Array, d_quadratic: jax.Array, nu: jax.Array) -
     return jnp.diag(d_linear + d_quadratic * jnp.abs(nu))
 
 
-def restoring_forces(
-    euler: jax.Array, weight: Any, buoyancy: Any, r_g: jax.Array, r_b: jax.Array
-) -> jax.Array:
+def restoring_forces(euler: jax.Array, weight: Any, buoyancy: Any, r_g: jax.Array, r_b: jax.Array) -> jax.Array:
     """Restoring forces ``g(η)`` (Fossen eq. 4.6) of weight ``W`` at ``r_g`` and buoyancy ``B`` at
     ``r_b`` (body frame, m, relative to the body origin); ``(6,)`` in N and N·m."""
     rot = rotation_zyx(euler)
@@ -154,10 +157,13 @@ def unbalanced_forces(
 
 
 def inverse_dynamics(
-    mass: jax.Array, d_linear: jax.Array, d_quadratic: jax.Array, g: jax.Array,
-    nu: jax.Array, nu_r: jax.Array, nu_r_dot: jax.Array,
+    mass: jax.Array,
+    d_linear: jax.Array,
+    d_quadratic: jax.Array,
+    g: jax.Array,
+    nu: jax.Array,
+    nu_r: jax.Array,
+    nu_r_dot: jax.Array,
 ) -> jax.Array:
     """Computed-torque force ``M ν̇_r + C(ν) ν_r + D(ν) ν_r + g`` (Slotine–Li form); ``(6,)``."""
-    return (mass @ nu_r_dot + coriolis_from_mass(mass, nu) @ nu_r
-            + damping_matrix(d_linear, d_quadratic, nu) @ nu_r + g)
-
+    return mass @ nu_r_dot + coriolis_from_mass(mass, nu) @ nu_r + damping_matrix(d_linear, d_quadratic, nu) @ nu_r + g

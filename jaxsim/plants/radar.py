@@ -48,9 +48,15 @@ class Radar2D:
     period: float = static_field(default=PAPER_SCAN_PERIOD)
 
 
-def radar(range_std: Any = 0.0, bearing_std: Any = 0.0, *, period: float = PAPER_SCAN_PERIOD,
-          range_resolution: Any = PAPER_RANGE_RESOLUTION, bearing_resolution: Any = PAPER_BEARING_RESOLUTION,
-          position: Any = (0.0, 0.0)) -> Radar2D:
+def radar(
+    range_std: Any = 0.0,
+    bearing_std: Any = 0.0,
+    *,
+    period: float = PAPER_SCAN_PERIOD,
+    range_resolution: Any = PAPER_RANGE_RESOLUTION,
+    bearing_resolution: Any = PAPER_BEARING_RESOLUTION,
+    position: Any = (0.0, 0.0),
+) -> Radar2D:
     """Validated :class:`Radar2D`.
 
     Raises:
@@ -60,14 +66,19 @@ def radar(range_std: Any = 0.0, bearing_std: Any = 0.0, *, period: float = PAPER
     period_np = np.asarray(period, dtype=float)
     if period_np.shape != () or not np.isfinite(period_np) or period_np <= 0:
         raise ValueError(f"period: the scan period must be a positive number of seconds, got {period!r}")
-    for name, value in (("range_std", range_std), ("bearing_std", bearing_std),
-                        ("range_resolution", range_resolution), ("bearing_resolution", bearing_resolution)):
+    for name, value in (
+        ("range_std", range_std),
+        ("bearing_std", bearing_std),
+        ("range_resolution", range_resolution),
+        ("bearing_resolution", bearing_resolution),
+    ):
         check_positive(name, value, allow_zero=True)
     check_shape("position", position, (2,))
     check_finite("position", position)
     f = lambda v: jnp.asarray(v, float)  # noqa: E731
-    return Radar2D(f(range_std), f(bearing_std), f(range_resolution), f(bearing_resolution), f(position),
-                   float(period_np))
+    return Radar2D(
+        f(range_std), f(bearing_std), f(range_resolution), f(bearing_resolution), f(position), float(period_np)
+    )
 
 
 def scan_times(sensor: Radar2D, t_final: float) -> np.ndarray:

@@ -71,23 +71,19 @@ def static_plant(params: StaticParams | None = None, **kwargs: Any) -> Plant:
     """The static plant as a :class:`~jaxsim.core.system.Plant` (``K``, ``T1``, ``T2`` as kwargs)."""
     p = params if params is not None else StaticParams(**kwargs)
     validate_static(p)
-    return Plant(p, static_dynamics, position_output, n_states=2, n_inputs=1, n_outputs=1,
-                 name="static_second_order")
+    return Plant(p, static_dynamics, position_output, n_states=2, n_inputs=1, n_outputs=1, name="static_second_order")
 
 
 def astatic_plant(params: AstaticParams | None = None, **kwargs: Any) -> Plant:
     """The astatic plant as a :class:`~jaxsim.core.system.Plant` (``K``, ``T`` as kwargs)."""
     p = params if params is not None else AstaticParams(**kwargs)
     validate_astatic(p)
-    return Plant(p, astatic_dynamics, position_output, n_states=2, n_inputs=1, n_outputs=1,
-                 name="astatic_second_order")
+    return Plant(p, astatic_dynamics, position_output, n_states=2, n_inputs=1, n_outputs=1, name="astatic_second_order")
 
 
 def static_transfer_function(p: StaticParams) -> tuple[jax.Array, jax.Array]:
     """``(num, den)`` in descending powers of s."""
-    return jnp.stack([jnp.asarray(p.K, float)]), jnp.stack(
-        [p.T1 * p.T2, p.T1 + p.T2, jnp.ones_like(p.T1 * 1.0)]
-    )
+    return jnp.stack([jnp.asarray(p.K, float)]), jnp.stack([p.T1 * p.T2, p.T1 + p.T2, jnp.ones_like(p.T1 * 1.0)])
 
 
 def astatic_transfer_function(p: AstaticParams) -> tuple[jax.Array, jax.Array]:

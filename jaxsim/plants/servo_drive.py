@@ -124,14 +124,27 @@ def _m11(a: ArmParams, q2: jax.Array, q3: jax.Array) -> jax.Array:
     r2 = a.lc2 * jnp.cos(th2)
     r3 = a.l2 * jnp.cos(th2) + a.lc3 * jnp.cos(th3)
     rl = a.l2 * jnp.cos(th2) + a.l3 * jnp.cos(th3)
-    return (a.Js1 + a.Js2 * jnp.sin(th2) ** 2 + a.Jn2 * jnp.cos(th2) ** 2 + a.m2 * r2**2
-            + a.Js3 * jnp.sin(th3) ** 2 + a.Jn3 * jnp.cos(th3) ** 2 + a.m3 * r3**2 + a.m_load * rl**2)
+    return (
+        a.Js1
+        + a.Js2 * jnp.sin(th2) ** 2
+        + a.Jn2 * jnp.cos(th2) ** 2
+        + a.m2 * r2**2
+        + a.Js3 * jnp.sin(th3) ** 2
+        + a.Jn3 * jnp.cos(th3) ** 2
+        + a.m3 * r3**2
+        + a.m_load * rl**2
+    )
 
 
 def _m22(a: ArmParams, q3: jax.Array) -> jax.Array:
     c3 = jnp.cos(q3)
-    return (a.Jn2 + a.m2 * a.lc2**2 + a.Jn3 + a.m3 * (a.l2**2 + a.lc3**2 + 2 * a.l2 * a.lc3 * c3)
-            + a.m_load * (a.l2**2 + a.l3**2 + 2 * a.l2 * a.l3 * c3))
+    return (
+        a.Jn2
+        + a.m2 * a.lc2**2
+        + a.Jn3
+        + a.m3 * (a.l2**2 + a.lc3**2 + 2 * a.l2 * a.lc3 * c3)
+        + a.m_load * (a.l2**2 + a.l3**2 + 2 * a.l2 * a.l3 * c3)
+    )
 
 
 def _m23(a: ArmParams, q3: jax.Array) -> jax.Array:
@@ -140,8 +153,9 @@ def _m23(a: ArmParams, q3: jax.Array) -> jax.Array:
 
 
 def _potential(a: ArmParams, q2: jax.Array, q3: jax.Array) -> jax.Array:
-    return a.g * ((a.m2 * a.lc2 + (a.m3 + a.m_load) * a.l2) * jnp.sin(q2)
-                  + (a.m3 * a.lc3 + a.m_load * a.l3) * jnp.sin(q2 + q3))
+    return a.g * (
+        (a.m2 * a.lc2 + (a.m3 + a.m_load) * a.l2) * jnp.sin(q2) + (a.m3 * a.lc3 + a.m_load * a.l3) * jnp.sin(q2 + q3)
+    )
 
 
 def other_joints(m: OtherJoints, t: jax.Array) -> tuple[jax.Array, ...]:
@@ -161,9 +175,12 @@ def coupling(p: ServoParams, q2: jax.Array, t: jax.Array) -> Coupling:
     a = p.arm
     dq1, q3, dq3, ddq3 = other_joints(p.motion, t)
     H, h = inertia(p, t)
-    M = (_m23(a, q3) * ddq3 + jax.grad(_m23, argnums=1)(a, q3) * dq3**2
-         - 0.5 * jax.grad(_m11, argnums=1)(a, q2, q3) * dq1**2
-         + jax.grad(_potential, argnums=1)(a, q2, q3))
+    M = (
+        _m23(a, q3) * ddq3
+        + jax.grad(_m23, argnums=1)(a, q3) * dq3**2
+        - 0.5 * jax.grad(_m11, argnums=1)(a, q2, q3) * dq1**2
+        + jax.grad(_potential, argnums=1)(a, q2, q3)
+    )
     return Coupling(H, h, M)
 
 
@@ -189,8 +206,9 @@ def dynamics(p: ServoParams, x: jax.Array, u: jax.Array, t: jax.Array) -> jax.Ar
     d = p.drive
     c = coupling(p, x[0], t)
     jt = d.J + c.H / d.i_r**2
-    torque = (d.k_m * x[2] - (d.k_v + c.h / d.i_r**2) * x[1] - d.M_dry * jnp.sign(x[1])
-              - c.M / d.i_r + fault_torque(p, x, t))
+    torque = (
+        d.k_m * x[2] - (d.k_v + c.h / d.i_r**2) * x[1] - d.M_dry * jnp.sign(x[1]) - c.M / d.i_r + fault_torque(p, x, t)
+    )
     return jnp.stack([x[1] / d.i_r, torque / jt, (-d.k_w * x[1] - d.R_m * x[2] + d.k_y * u[0]) / d.L_m])
 
 
@@ -252,16 +270,21 @@ def phi(p: ServoParams, t: jax.Array) -> jax.Array:
     return -a * d.L_m / (d.i_r * d.k_w)
 
 
-def _known_terms(op: ObserverModelParams, t: jax.Array, y: jax.Array, u: jax.Array,
-                 z2: jax.Array) -> tuple[jax.Array, jax.Array]:
+def _known_terms(
+    op: ObserverModelParams, t: jax.Array, y: jax.Array, u: jax.Array, z2: jax.Array
+) -> tuple[jax.Array, jax.Array]:
     p, Q = op.plant, op.Q
     d = p.drive
     ph, dph = jax.jvp(lambda tt: phi(p, tt), (t,), (jnp.ones_like(t),))
     jt = total_inertia(p, t)
     m = coupling(p, y[0], t).M / (d.i_r * jt)
     x2_hat = d.i_r * (z2[0] - Q * y[0] - ph * y[1])
-    dx2star = ((d.k_m / (jt * d.i_r) - ph * d.R_m / d.L_m + dph) * y[1] + ph * d.k_y * u[0] / d.L_m
-               - d.M_dry / (jt * d.i_r) * jnp.sign(x2_hat) - m / d.i_r)
+    dx2star = (
+        (d.k_m / (jt * d.i_r) - ph * d.R_m / d.L_m + dph) * y[1]
+        + ph * d.k_y * u[0] / d.L_m
+        - d.M_dry / (jt * d.i_r) * jnp.sign(x2_hat)
+        - m / d.i_r
+    )
     return -ph * y[1], jnp.reshape(dx2star - Q * ph * y[1], (1,))
 
 
@@ -275,9 +298,17 @@ def reduced_model(params: ObserverModelParams | None = None) -> ReducedModel:
     op = ObserverModelParams() if params is None else params
     validate(op.plant)
     Q = jnp.asarray(op.Q, float)
-    return ReducedModel(F1=-Q, F2=jnp.ones(1), F3=jnp.reshape(-Q**2, (1,)), F4=jnp.reshape(Q, (1, 1)),
-                        D1=jnp.asarray(0.0), D2=jnp.reshape(1.0 / jnp.asarray(op.plant.drive.i_r, float), (1,)),
-                        params=op, known=_known_terms, reduced_output=_angle)
+    return ReducedModel(
+        F1=-Q,
+        F2=jnp.ones(1),
+        F3=jnp.reshape(-(Q**2), (1,)),
+        F4=jnp.reshape(Q, (1, 1)),
+        D1=jnp.asarray(0.0),
+        D2=jnp.reshape(1.0 / jnp.asarray(op.plant.drive.i_r, float), (1,)),
+        params=op,
+        known=_known_terms,
+        reduced_output=_angle,
+    )
 
 
 def reduced_state(p: ServoParams, x: jax.Array, t: jax.Array, Q: float = -1.0) -> jax.Array:

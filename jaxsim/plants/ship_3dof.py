@@ -78,8 +78,17 @@ def dynamics(p: ShipParams, x: jax.Array, u: jax.Array, t: jax.Array) -> jax.Arr
     vr = A @ jnp.stack([v, r]) + b * delta
     surge_rate = p.Xu / (p.m - p.Xudot) * (p.U0 / p.L) * (du - u[1])
     speed = p.U0 + du
-    return jnp.stack([speed * jnp.cos(psi) - v * jnp.sin(psi), speed * jnp.sin(psi) + v * jnp.cos(psi), r,
-                      surge_rate, vr[0], vr[1], (u[0] - delta) / p.T_rudder])
+    return jnp.stack(
+        [
+            speed * jnp.cos(psi) - v * jnp.sin(psi),
+            speed * jnp.sin(psi) + v * jnp.cos(psi),
+            r,
+            surge_rate,
+            vr[0],
+            vr[1],
+            (u[0] - delta) / p.T_rudder,
+        ]
+    )
 
 
 def output(p: ShipParams, x: jax.Array) -> jax.Array:

@@ -46,7 +46,7 @@ import jax.numpy as jnp
 from jaxsim.core.linearize import Equilibrium, Linearization, find_equilibrium, linearize
 from jaxsim.core.pytree import pytree_dataclass, replace
 from jaxsim.core.switching import smooth_sign
-from jaxsim.core.system import Plant, gaussian_sensor, Sensor
+from jaxsim.core.system import Plant, Sensor, gaussian_sensor
 from jaxsim.core.validation import check_finite, check_positive
 
 STATE_NAMES = ("pitch", "yaw", "pitch_rate", "yaw_rate", "tau1", "tau2", "M_R")
@@ -146,8 +146,7 @@ def validate_params(p: TRMSParams) -> None:
     """Raise ``ValueError`` for non-physical parameters (concrete values only)."""
     for name in ("I1", "I2", "T11", "T10", "T21", "T20", "Tp", "u_max"):
         check_positive(name, getattr(p, name))
-    for name in ("a1", "b1", "a2", "b2", "Mg", "B1psi", "B2psi", "B1phi", "B2phi", "Kgy", "k1", "k2",
-                 "T0", "kc"):
+    for name in ("a1", "b1", "a2", "b2", "Mg", "B1psi", "B2psi", "B1phi", "B2phi", "Kgy", "k1", "k2", "T0", "kc"):
         check_finite(name, getattr(p, name))
     check_positive("sign_smoothing", p.sign_smoothing, allow_zero=True)
 

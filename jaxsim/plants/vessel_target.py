@@ -59,8 +59,14 @@ class VesselManoeuvre:
         return self.turn_start + self.turn_duration
 
 
-def vessel_manoeuvre(speed: Any = 10.0, turn_radius: Any = 300.0, turn_start: Any = 45.0,
-                     turn_angle: Any = math.pi / 2, heading: Any = 0.0, start: Any = (0.0, 0.0)) -> VesselManoeuvre:
+def vessel_manoeuvre(
+    speed: Any = 10.0,
+    turn_radius: Any = 300.0,
+    turn_start: Any = 45.0,
+    turn_angle: Any = math.pi / 2,
+    heading: Any = 0.0,
+    start: Any = (0.0, 0.0),
+) -> VesselManoeuvre:
     """Validated :class:`VesselManoeuvre` (``ValueError`` for a non-positive speed or radius, a
     negative turn start, a non-finite value or a start position that is not ``(2,)``)."""
     check_positive("speed", speed)
@@ -70,8 +76,14 @@ def vessel_manoeuvre(speed: Any = 10.0, turn_radius: Any = 300.0, turn_start: An
     check_finite("heading", heading)
     check_shape("start", start, (2,))
     check_finite("start", start)
-    return VesselManoeuvre(jnp.asarray(speed, float), jnp.asarray(turn_radius, float), jnp.asarray(turn_start, float),
-                           jnp.asarray(turn_angle, float), jnp.asarray(heading, float), jnp.asarray(start, float))
+    return VesselManoeuvre(
+        jnp.asarray(speed, float),
+        jnp.asarray(turn_radius, float),
+        jnp.asarray(turn_start, float),
+        jnp.asarray(turn_angle, float),
+        jnp.asarray(heading, float),
+        jnp.asarray(start, float),
+    )
 
 
 class VesselState(NamedTuple):

@@ -10,5 +10,18 @@ from jaxsim.problem.problem import Jitted, Problem, Scenario
 from jaxsim.problem.reducers import cvar, mean, worst_case
 from jaxsim.problem.space import Param, ParamSpace, Sorted
 
-__all__ = ["Breakdown", "Jitted", "Objective", "Param", "ParamSpace", "Problem", "RunningCost", "Scenario", "Sorted",
-           "combine", "cvar", "mean", "worst_case"]
+__all__ = [
+    "Breakdown",
+    "Jitted",
+    "Objective",
+    "Param",
+    "ParamSpace",
+    "Problem",
+    "RunningCost",
+    "Scenario",
+    "Sorted",
+    "combine",
+    "cvar",
+    "mean",
+    "worst_case",
+]

@@ -99,13 +99,23 @@ def build_loop(
     lead = formation.LeaderParams()
     sensor = formation.camera_sensor(lead, cam_pos_std, cam_yaw_std, cfg.camera_period, dt)
     est = leader_predictor(
-        cfg.window, cfg.degree, cfg.camera_period,
+        cfg.window,
+        cfg.degree,
+        cfg.camera_period,
         accel_psd=cfg.accel_psd if accel_psd is None else accel_psd,
-        meas_std=cfg.meas_std if meas_std is None else meas_std, p0=cfg.p0,
-        t_start=cfg.estimator_start if estimator_start is None else estimator_start, mode=mode)
-    ctrl = auv_tracking(auv.nominal_params(), cfg.lam if lam is None else lam, cfg.k_s if k_s is None else k_s,
-                        cfg.switch if switch is None else switch, cfg.width if width is None else width,
-                        cfg.t_follower_start)
+        meas_std=cfg.meas_std if meas_std is None else meas_std,
+        p0=cfg.p0,
+        t_start=cfg.estimator_start if estimator_start is None else estimator_start,
+        mode=mode,
+    )
+    ctrl = auv_tracking(
+        auv.nominal_params(),
+        cfg.lam if lam is None else lam,
+        cfg.k_s if k_s is None else k_s,
+        cfg.switch if switch is None else switch,
+        cfg.width if width is None else width,
+        cfg.t_follower_start,
+    )
     return ClosedLoop(auv.auv_plant(plant), ctrl, sensor=sensor, estimator=est, actuate=add_input_disturbance)
 
 
@@ -122,8 +132,9 @@ def tick_errors(x: jax.Array, t: jax.Array) -> tuple[jax.Array, jax.Array]:
     lead = formation.LeaderParams()
     eta_dot = marine.kinematics_jacobian(x[:6]) @ x[6:]
     x_dot = jnp.concatenate([eta_dot, jnp.zeros(6)])
-    return jax.jvp(lambda s, z: formation.level_frame_error(formation.target_point(lead, s), z),
-                   (t, x), (jnp.ones_like(t), x_dot))
+    return jax.jvp(
+        lambda s, z: formation.level_frame_error(formation.target_point(lead, s), z), (t, x), (jnp.ones_like(t), x_dot)
+    )
 
 
 def _window(t: jax.Array, lo: float, hi: float) -> jax.Array:
@@ -140,12 +151,21 @@ def metric_fold(cfg: FormationSetup, t_final: float, loss_start: float | None = 
     inf = jnp.inf
 
     acc0 = {
-        "err0": jnp.zeros(()), "first_below": jnp.asarray(inf), "last_above": jnp.asarray(-inf),
-        "ss_abs": jnp.zeros(3), "ss_norm": jnp.zeros(()), "ss_rel_vel": jnp.zeros(()),
-        "t32_peak": jnp.zeros(()), "rel_vel_x_min": jnp.asarray(inf),
-        "est_startup_max": jnp.zeros(()), "est_last_above": jnp.asarray(-inf),
-        "t32_est_peak": jnp.zeros(()), "t32_est_last_above": jnp.asarray(t32_lo),
-        "sq_err": jnp.zeros(()), "effort": jnp.zeros(()), "loss_time": jnp.zeros(()),
+        "err0": jnp.zeros(()),
+        "first_below": jnp.asarray(inf),
+        "last_above": jnp.asarray(-inf),
+        "ss_abs": jnp.zeros(3),
+        "ss_norm": jnp.zeros(()),
+        "ss_rel_vel": jnp.zeros(()),
+        "t32_peak": jnp.zeros(()),
+        "rel_vel_x_min": jnp.asarray(inf),
+        "est_startup_max": jnp.zeros(()),
+        "est_last_above": jnp.asarray(-inf),
+        "t32_est_peak": jnp.zeros(()),
+        "t32_est_last_above": jnp.asarray(t32_lo),
+        "sq_err": jnp.zeros(()),
+        "effort": jnp.zeros(()),
+        "loss_time": jnp.zeros(()),
     }
 
     def fn(a: dict, tick: Any) -> dict:
@@ -182,7 +202,9 @@ def metric_fold(cfg: FormationSetup, t_final: float, loss_start: float | None = 
             "err0_m": a["err0"],
             "t_to_0p2m_s": a["first_below"],
             "t_last_above_0p2m_s": a["last_above"] + ts,
-            "ss_err_x_m": a["ss_abs"][0], "ss_err_y_m": a["ss_abs"][1], "ss_err_z_m": a["ss_abs"][2],
+            "ss_err_x_m": a["ss_abs"][0],
+            "ss_err_y_m": a["ss_abs"][1],
+            "ss_err_z_m": a["ss_abs"][2],
             "ss_err_m": a["ss_norm"],
             "ss_rel_vel_x_mps": a["ss_rel_vel"],
             "t32_peak_err_m": a["t32_peak"],
@@ -198,8 +220,15 @@ def metric_fold(cfg: FormationSetup, t_final: float, loss_start: float | None = 
     return fn, acc0, finish
 
 
-def run_metrics(cfg: FormationSetup, loop: ClosedLoop, key: jax.Array, *, dt: float | None = None,
-                t_final: float | None = None, loss_start: float | None = None) -> dict:
+def run_metrics(
+    cfg: FormationSetup,
+    loop: ClosedLoop,
+    key: jax.Array,
+    *,
+    dt: float | None = None,
+    t_final: float | None = None,
+    loss_start: float | None = None,
+) -> dict:
     """The formation metrics of one rollout (pure: jit/vmap/grad it from outside)."""
     dt = cfg.dt if dt is None else dt
     t_final = cfg.t_final if t_final is None else t_final
@@ -215,9 +244,11 @@ def run_metrics(cfg: FormationSetup, loop: ClosedLoop, key: jax.Array, *, dt: fl
 def deviation_space(cfg: FormationSetup) -> dict:
     """Deviations uniform within ±Δ (the paper's bounds (3)) around the nominal plant."""
     dev = auv.PAPER_DEVIATION
-    return {"dm": deviation(np.zeros(6), np.asarray(dev.mass)),
-            "dd1": deviation(np.zeros(6), np.asarray(dev.d1)),
-            "dd2": deviation(np.zeros(6), np.asarray(dev.d2))}
+    return {
+        "dm": deviation(np.zeros(6), np.asarray(dev.mass)),
+        "dd1": deviation(np.zeros(6), np.asarray(dev.d1)),
+        "dd2": deviation(np.zeros(6), np.asarray(dev.d2)),
+    }
 
 
 def plant_of(draw: dict) -> auv.AUVParams:
@@ -230,8 +261,15 @@ def mc_metric(cfg: FormationSetup, mode: str) -> Callable[[jax.Array, dict], dic
     def metric(key: jax.Array, draw: dict) -> dict:
         loop = build_loop(cfg, plant_of(draw), mode=mode, cam_pos_std=cfg.cam_pos_std, cam_yaw_std=yaw_std)
         m = run_metrics(cfg, loop, key)
-        keep = ("t_to_0p2m_s", "ss_err_m", "ss_err_x_m", "ss_err_y_m", "ss_err_z_m", "t32_peak_err_m",
-                "rel_vel_x_min_mps")
+        keep = (
+            "t_to_0p2m_s",
+            "ss_err_m",
+            "ss_err_x_m",
+            "ss_err_y_m",
+            "ss_err_z_m",
+            "t32_peak_err_m",
+            "rel_vel_x_min_mps",
+        )
         out = {k: m[k] for k in keep}
         out["reached_0p2m"] = jnp.isfinite(m["t_to_0p2m_s"])
         return out
@@ -242,18 +280,30 @@ def mc_metric(cfg: FormationSetup, mode: str) -> Callable[[jax.Array, dict], dic
 def tuning_space(cfg: FormationSetup) -> ParamSpace:
     """``Λ`` (6,) in [0.05, 1.5], ``K_s`` (6,) in [10, 300], log10 of the Kalman ``accel_psd`` in [−6, 1]
     and of ``meas_std`` in [−4, −0.5]; from the configured (paper) values."""
-    return ParamSpace(lam=Param(lo=0.05, hi=1.5, init=cfg.lam), k_s=Param(lo=10.0, hi=300.0, init=cfg.k_s),
-                      log10_accel_psd=Param(lo=-6.0, hi=1.0, init=math.log10(cfg.accel_psd)),
-                      log10_meas_std=Param(lo=-4.0, hi=-0.5, init=math.log10(cfg.meas_std)))
+    return ParamSpace(
+        lam=Param(lo=0.05, hi=1.5, init=cfg.lam),
+        k_s=Param(lo=10.0, hi=300.0, init=cfg.k_s),
+        log10_accel_psd=Param(lo=-6.0, hi=1.0, init=math.log10(cfg.accel_psd)),
+        log10_meas_std=Param(lo=-4.0, hi=-0.5, init=math.log10(cfg.meas_std)),
+    )
 
 
 def tuning_loss(cfg: FormationSetup, theta: dict, sample: dict, key: jax.Array) -> jax.Array:
     """Mean ‖e‖² + ρ mean (τ/100)² over ``[tune_loss_start, tune_t_final]`` on one deviation draw
     ``sample`` with camera noise ``key`` (smooth ``tanh`` switching, step ``tune_dt``)."""
-    loop = build_loop(cfg, plant_of(sample), dt=cfg.tune_dt, lam=theta["lam"], k_s=theta["k_s"],
-                      switch="tanh", width=cfg.tune_width, accel_psd=10.0 ** theta["log10_accel_psd"],
-                      meas_std=10.0 ** theta["log10_meas_std"], cam_pos_std=cfg.cam_pos_std,
-                      cam_yaw_std=math.radians(cfg.cam_yaw_std_deg))
+    loop = build_loop(
+        cfg,
+        plant_of(sample),
+        dt=cfg.tune_dt,
+        lam=theta["lam"],
+        k_s=theta["k_s"],
+        switch="tanh",
+        width=cfg.tune_width,
+        accel_psd=10.0 ** theta["log10_accel_psd"],
+        meas_std=10.0 ** theta["log10_meas_std"],
+        cam_pos_std=cfg.cam_pos_std,
+        cam_yaw_std=math.radians(cfg.cam_yaw_std_deg),
+    )
     m = run_metrics(cfg, loop, key, dt=cfg.tune_dt, t_final=cfg.tune_t_final, loss_start=cfg.tune_loss_start)
     return m["mean_sq_err_m2"] + cfg.effort_weight * m["mean_effort"]
 
@@ -268,5 +318,10 @@ def draw_samples(cfg: FormationSetup, n: int, seed: int) -> dict:
 
 def tuning_problem(cfg: FormationSetup, n: int, seed: int) -> Problem:
     """CVaR at ``cvar_alpha`` of :func:`tuning_loss` over ``n`` fixed draws (:func:`draw_samples`)."""
-    return Problem.from_loss("auv_formation", tuning_space(cfg), lambda p, d, k: tuning_loss(cfg, p, d, k),
-                             scenarios=draw_samples(cfg, n, seed), reduce=lambda v: cvar(v, cfg.cvar_alpha))
+    return Problem.from_loss(
+        "auv_formation",
+        tuning_space(cfg),
+        lambda p, d, k: tuning_loss(cfg, p, d, k),
+        scenarios=draw_samples(cfg, n, seed),
+        reduce=lambda v: cvar(v, cfg.cvar_alpha),
+    )

@@ -21,7 +21,7 @@ import numpy as np
 
 from jaxsim.control import fuzzy as fz
 from jaxsim.control.stability_degree import max_stability_degree
-from jaxsim.core.metrics import step_info, steady_state
+from jaxsim.core.metrics import steady_state, step_info
 from jaxsim.core.rollout import ClosedLoop, Timing, simulate
 from jaxsim.core.signals import Ramp, Step, Sum
 from jaxsim.plants.second_order import (
@@ -62,8 +62,10 @@ class AccuracySetup:
 
 def designs(cfg: AccuracySetup) -> dict[tuple[str, str], dict[str, float]]:
     """Maximum-stability-degree P and PI gains for both plants (computed)."""
-    tfs = {"static": static_transfer_function(StaticParams(cfg.K_static, cfg.T1, cfg.T2)),
-           "astatic": astatic_transfer_function(AstaticParams(cfg.K_astatic, cfg.T_astatic))}
+    tfs = {
+        "static": static_transfer_function(StaticParams(cfg.K_static, cfg.T1, cfg.T2)),
+        "astatic": astatic_transfer_function(AstaticParams(cfg.K_astatic, cfg.T_astatic)),
+    }
     out = {}
     for plant, (num, den) in tfs.items():
         for structure in ("P", "PI"):
@@ -124,8 +126,15 @@ def simulate_cases(cfg: AccuracySetup, cases: list[Case], timing: Timing, tail: 
         e = tr.r[:, 0] - tr.y[:, 0]
         ss = steady_state(e, tail, rtol=cfg.drift_rtol)
         info = step_info(tr.t, tr.y[:, 0])
-        return (ss.value, ss.converged, info.settling_time, info.overshoot,
-                tr.t[::save_every], tr.y[::save_every, 0], tr.u[::save_every, 0])
+        return (
+            ss.value,
+            ss.converged,
+            info.settling_time,
+            info.overshoot,
+            tr.t[::save_every],
+            tr.y[::save_every, 0],
+            tr.u[::save_every, 0],
+        )
 
     out = jax.jit(jax.vmap(one))(params, sig)
     return [tuple(np.asarray(o[k]) for o in out) for k in range(len(cases))]
@@ -174,6 +183,9 @@ def mamdani_fit_problem(target: Any, e: jax.Array) -> tuple[Problem, Callable[[d
     def loss(p, draw, key):
         return jnp.mean((fz.static_characteristic(build(p), e) - u_ref) ** 2)
 
-    space = ParamSpace(e_bp=Sorted(lo=1e-6, hi=10.0, init=(a, c)), u_bp=Sorted(lo=1e-6, hi=10.0, init=(b, d)),
-                       width=Param(lo=1e-6, hi=10.0, init=0.2 * d, reparam=Positive()))
+    space = ParamSpace(
+        e_bp=Sorted(lo=1e-6, hi=10.0, init=(a, c)),
+        u_bp=Sorted(lo=1e-6, hi=10.0, init=(b, d)),
+        width=Param(lo=1e-6, hi=10.0, init=0.2 * d, reparam=Positive()),
+    )
     return Problem.from_loss("mamdani_fit", space, loss), build

@@ -129,7 +129,9 @@ class Problem:
         validate_space(self.uncertainty)
         missing = [k for k in self.uncertainty if k not in self.nominal]
         if missing:
-            raise ValueError(f"nominal: needs a nominal value for every uncertain parameter; missing {', '.join(missing)}")
+            raise ValueError(
+                f"nominal: needs a nominal value for every uncertain parameter; missing {', '.join(missing)}"
+            )
         if self.constraints is not None and not callable(self.constraints):
             raise ValueError("constraints: must be callable params -> g (feasible iff g ≤ 0) or None")
         if not callable(self.reduce):
@@ -246,8 +248,9 @@ class Problem:
         existing scenarios, if any: every draw at every operating point)."""
         both = [k for k in self.scenarios if k in self.uncertainty]
         if both:
-            raise ValueError(f"{both[0]}: is both a fixed scenario value and uncertain; drop it from one of "
-                             "scenarios/uncertainty")
+            raise ValueError(
+                f"{both[0]}: is both a fixed scenario value and uncertain; drop it from one of scenarios/uncertainty"
+            )
         draws = self.sample(key, n)
         if self.scenarios:
             s = self.n_scenarios

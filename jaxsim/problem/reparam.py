@@ -124,8 +124,9 @@ def check_bounds(lo: Any, hi: Any, lo_name: str = "lo", hi_name: str = "hi") -> 
     except ValueError:
         raise ValueError(f"{lo_name}/{hi_name}: shapes {a.shape} and {b.shape} do not broadcast") from None
     if not ok:
-        raise ValueError(f"{lo_name}/{hi_name}: need {lo_name} < {hi_name} element-wise, got "
-                         f"{lo_name}={lo!r}, {hi_name}={hi!r}")
+        raise ValueError(
+            f"{lo_name}/{hi_name}: need {lo_name} < {hi_name} element-wise, got {lo_name}={lo!r}, {hi_name}={hi!r}"
+        )
 
 
 def check_inside(name: str, x: Any, lo: Any, hi: Any) -> None:
@@ -216,8 +217,9 @@ class SortedBreakpoints(Reparam):
             raise ValueError(f"{name}: breakpoints must be an array of shape (n,), got a scalar")
         d = np.diff(np.concatenate([np.broadcast_to(lo, arr.shape[:-1] + (1,)), arr], axis=-1), axis=-1)
         if not np.all(d > gap):
-            raise ValueError(f"{name}: breakpoints must increase from lo={self.lo!r} with gaps > "
-                             f"min_gap={self.min_gap!r}, got {x!r}")
+            raise ValueError(
+                f"{name}: breakpoints must increase from lo={self.lo!r} with gaps > min_gap={self.min_gap!r}, got {x!r}"
+            )
 
 
 def _tril(n: int) -> tuple[np.ndarray, np.ndarray]:

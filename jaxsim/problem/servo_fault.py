@@ -53,23 +53,51 @@ def _pid_step(p, s, r, y, ts, t):
 
 def position_loop(cfg: FaultSetup, plant_params: sd.ServoParams, noise: jax.Array) -> ClosedLoop:
     """PID on the measured angle, reference ``sin t``, Gaussian sensor of std ``noise`` (2,)."""
-    ctrl = Controller(PIDParams(kp=10.0, ki=0.5, kd=1.0, tf=cfg.pid_derivative_filter, anti_windup="none"),
-                      _pid_init, _pid_step, name="position_pid")
-    return ClosedLoop(sd.servo_drive_plant(plant_params), ctrl, reference=Sine(1.0, 1.0 / (2 * np.pi)),
-                      sensor=Sensor(params=noise, name="gaussian"))  # gaussian_sensor() is not traceable
+    ctrl = Controller(
+        PIDParams(kp=10.0, ki=0.5, kd=1.0, tf=cfg.pid_derivative_filter, anti_windup="none"),
+        _pid_init,
+        _pid_step,
+        name="position_pid",
+    )
+    return ClosedLoop(
+        sd.servo_drive_plant(plant_params),
+        ctrl,
+        reference=Sine(1.0, 1.0 / (2 * np.pi)),
+        sensor=Sensor(params=noise, name="gaussian"),
+    )  # gaussian_sensor() is not traceable
 
 
-def observer(cfg: FaultSetup, gains: smo.SMOGains | None = None, scheme: str = "implicit_sign",
-             filter_tau: float = 0.0, solver=None, check: bool = True) -> smo.SMOParams:
+def observer(
+    cfg: FaultSetup,
+    gains: smo.SMOGains | None = None,
+    scheme: str = "implicit_sign",
+    filter_tau: float = 0.0,
+    solver=None,
+    check: bool = True,
+) -> smo.SMOParams:
     gains = smo.SMOGains(cfg.k1, cfg.k2, cfg.k3) if gains is None else gains
     bounds = sd.sliding_bounds(sd.ServoParams(), cfg.fault_bound) if check else None
     kw = {} if solver is None else {"solver": solver}
-    return smo.reduced_order_smo(sd.reduced_model(sd.ObserverModelParams(Q=cfg.Q)), gains, bounds=bounds,
-                                 width=cfg.width, filter_tau=filter_tau, scheme=scheme, **kw)
+    return smo.reduced_order_smo(
+        sd.reduced_model(sd.ObserverModelParams(Q=cfg.Q)),
+        gains,
+        bounds=bounds,
+        width=cfg.width,
+        filter_tau=filter_tau,
+        scheme=scheme,
+        **kw,
+    )
 
 
-def run_once(cfg: FaultSetup, par: smo.SMOParams, plant_params: sd.ServoParams, noise: jax.Array, key: jax.Array,
-             ts: float, t_final: float) -> dict[str, jax.Array]:
+def run_once(
+    cfg: FaultSetup,
+    par: smo.SMOParams,
+    plant_params: sd.ServoParams,
+    noise: jax.Array,
+    key: jax.Array,
+    ts: float,
+    t_final: float,
+) -> dict[str, jax.Array]:
     """Simulate loop + observer; returns the time series ``t, M, M_hat, x2, v``."""
     loop = position_loop(cfg, plant_params, noise)
     tr = simulate(loop, sd.initial_state(plant_params, 0.0), Timing(t_final, ts), key=key)
@@ -91,9 +119,14 @@ def error_stats(cfg: FaultSetup, s: dict[str, jax.Array], ts: float) -> dict[str
     near = jnp.convolve(flip.astype(float), jnp.ones(2 * max(k, 1) + 1), mode="same") > 0
     masked = jnp.where(t >= onset + cfg.settle, rel, jnp.nan)
     pre = (t >= 0.5) & (t < onset)
-    return {"median": jnp.nanmedian(masked), "p99": jnp.nanpercentile(masked, 99.0), "max": jnp.nanmax(masked),
-            "max_excl_switching": jnp.nanmax(jnp.where(near, jnp.nan, masked)),
-            "pre_fault_max": jnp.max(jnp.where(pre, jnp.abs(M_hat), 0.0)) / scale, "scale": scale}
+    return {
+        "median": jnp.nanmedian(masked),
+        "p99": jnp.nanpercentile(masked, 99.0),
+        "max": jnp.nanmax(masked),
+        "max_excl_switching": jnp.nanmax(jnp.where(near, jnp.nan, masked)),
+        "pre_fault_max": jnp.max(jnp.where(pre, jnp.abs(M_hat), 0.0)) / scale,
+        "scale": scale,
+    }
 
 
 def perturbed(scales: jax.Array) -> sd.ServoParams:

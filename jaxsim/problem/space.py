@@ -82,8 +82,9 @@ class Param:
         if self.log and not np.all(lo > 0):
             raise ValueError(f"{name}.lo: a log-scaled parameter needs lo > 0, got {self.lo!r}")
         if self.reparam is None and not np.all((x0 > lo) & (x0 < hi)):
-            raise ValueError(f"{name}.init: must lie strictly inside (lo, hi) = ({self.lo!r}, {self.hi!r}), "
-                             f"got {self.init!r}")
+            raise ValueError(
+                f"{name}.init: must lie strictly inside (lo, hi) = ({self.lo!r}, {self.hi!r}), got {self.init!r}"
+            )
         if self.reparam is not None and not np.all((x0 >= lo) & (x0 <= hi)):
             raise ValueError(f"{name}.init: must lie inside [lo, hi] = [{self.lo!r}, {self.hi!r}], got {self.init!r}")
         return x0, lo, hi
@@ -120,11 +121,13 @@ class Sorted:
             raise ValueError(f"{name}.lo: the increments' lower bounds must be ≥ min_gap={gap}, got {self.lo!r}")
         inc = np.diff(np.concatenate([[origin], x0]))
         if not np.all(inc > gap):
-            raise ValueError(f"{name}.init: must increase from origin={origin} with gaps > min_gap={gap}, "
-                             f"got {self.init!r}")
+            raise ValueError(
+                f"{name}.init: must increase from origin={origin} with gaps > min_gap={gap}, got {self.init!r}"
+            )
         if not np.all((inc >= lo) & (inc <= hi)):
-            raise ValueError(f"{name}.init: its increments {inc.tolist()} must lie in [lo, hi] = "
-                             f"[{lo.tolist()}, {hi.tolist()}]")
+            raise ValueError(
+                f"{name}.init: its increments {inc.tolist()} must lie in [lo, hi] = [{lo.tolist()}, {hi.tolist()}]"
+            )
         return x0, lo, hi
 
 
@@ -229,7 +232,7 @@ class ParamSpace:
         z = jnp.asarray(z)
         if z.shape != (self.dim,):
             raise ValueError(f"z: expected shape ({self.dim},) for {self!r}, got {tuple(z.shape)}")
-        return {e.name: e.from_search(z[e.start:e.stop]) for e in self._entries}
+        return {e.name: e.from_search(z[e.start : e.stop]) for e in self._entries}
 
     def flat(self, params: dict[str, Any]) -> dict[str, float]:
         """``{coordinate name: value}`` of concrete ``params`` (values, not search coordinates; for

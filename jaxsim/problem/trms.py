@@ -113,13 +113,12 @@ class TRMSTuning:
     @staticmethod
     def weights(theta: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
         e = jnp.exp(theta)
-        return jnp.diag(e[:N_Q]), jnp.diag(e[N_Q:N_Q + N_R]), jnp.diag(e[N_Q + N_R:])
+        return jnp.diag(e[:N_Q]), jnp.diag(e[N_Q : N_Q + N_R]), jnp.diag(e[N_Q + N_R :])
 
     def design(self, theta: jax.Array) -> lqg_tracker.LQGTrackerParams:
         q, r, w = self.weights(theta)
         u_max = self.nominal.u_max
-        return lqg_tracker.design(self.lin, self.x_eq, self.u_eq, q, r, w, self.v, self.scenario.ts,
-                                  -u_max, u_max)
+        return lqg_tracker.design(self.lin, self.x_eq, self.u_eq, q, r, w, self.v, self.scenario.ts, -u_max, u_max)
 
     def stability_violation(self, params: lqg_tracker.LQGTrackerParams) -> jax.Array:
         """``max(0, ρ(Φ_cl) − (1 − margin))`` (zero iff feasible).
@@ -146,8 +145,9 @@ class TRMSTuning:
 
     def closed_loop(self, params: lqg_tracker.LQGTrackerParams, plant_params: Any, noise_std: Any) -> ClosedLoop:
         ctrl, est = lqg_tracker.lqg_tracker(params)
-        return ClosedLoop(trms_plant(plant_params), ctrl, reference=self.reference,
-                          sensor=angle_sensor(noise_std), estimator=est)
+        return ClosedLoop(
+            trms_plant(plant_params), ctrl, reference=self.reference, sensor=angle_sensor(noise_std), estimator=est
+        )
 
     def step_terms(self, t: jax.Array, r: jax.Array, y: jax.Array, u: jax.Array, u_max: Any) -> jax.Array:
         """Increments ``(3,)`` of ``(ITAE per step, ∫‖u_sat − u_eq‖², ∫ saturation excess²)`` over one
@@ -158,11 +158,13 @@ class TRMSTuning:
         ts, ref = self.scenario.ts, self.reference
         since_switch = jnp.mod(t - ref.t0, 0.5 * ref.period)
         u_sat = jnp.clip(u, -u_max, u_max)
-        return ts * jnp.stack([
-            jnp.sum(itae_integrand(since_switch, r - y)),
-            jnp.sum(energy_integrand(u_sat, self.u_eq)),
-            jnp.sum(saturation_excess_integrand(u, u_max)),
-        ])
+        return ts * jnp.stack(
+            [
+                jnp.sum(itae_integrand(since_switch, r - y)),
+                jnp.sum(energy_integrand(u_sat, self.u_eq)),
+                jnp.sum(saturation_excess_integrand(u, u_max)),
+            ]
+        )
 
     def step_loss(self, t: jax.Array, r: jax.Array, y: jax.Array, u: jax.Array, u_max: Any) -> jax.Array:
         """The loss accrued over one controller period (the weighted :meth:`step_terms`; the loss of
@@ -178,8 +180,9 @@ class TRMSTuning:
 
         return fold(loop, self.x_eq, self.timing, running, jnp.zeros(3), key=key)[0]
 
-    def rollout_terms(self, params: lqg_tracker.LQGTrackerParams, plant_params: Any, key: jax.Array,
-                      noise_std: Any) -> jax.Array:
+    def rollout_terms(
+        self, params: lqg_tracker.LQGTrackerParams, plant_params: Any, key: jax.Array, noise_std: Any
+    ) -> jax.Array:
         """``(ITAE per step, ∫‖u_sat − u_eq‖², ∫ saturation excess²)`` of one simulation."""
         return self.loop_terms(self.closed_loop(params, plant_params, noise_std), key)
 
@@ -191,18 +194,17 @@ class TRMSTuning:
     def stability_penalty(self, params: lqg_tracker.LQGTrackerParams) -> jax.Array:
         return self.scenario.penalty_weight * self.stability_violation(params) ** 2
 
-    def breakdown(self, theta: jax.Array, plant_params: Any = None, key: jax.Array | None = None,
-                  noise_std: Any = None) -> Breakdown:
+    def breakdown(
+        self, theta: jax.Array, plant_params: Any = None, key: jax.Array | None = None, noise_std: Any = None
+    ) -> Breakdown:
         """Every term of the loss for one simulation (defaults: nominal plant with the scenario's
         friction surrogate, the fixed noise key 0, the scenario's noise level)."""
         plant_params = self.plant_params() if plant_params is None else plant_params
         key = jax.random.PRNGKey(0) if key is None else key
         noise_std = self.scenario.noise_std if noise_std is None else noise_std
         params = self.design(theta)
-        return self.combine(self.rollout_terms(params, plant_params, key, noise_std),
-                            self.stability_penalty(params))
+        return self.combine(self.rollout_terms(params, plant_params, key, noise_std), self.stability_penalty(params))
 
     def loss(self, theta: jax.Array) -> jax.Array:
         """The tuning objective (nominal plant, friction surrogate, fixed noise key)."""
         return self.breakdown(theta).total
-

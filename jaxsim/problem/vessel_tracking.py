@@ -100,9 +100,15 @@ class RadarRun(NamedTuple):
 
 def nominal_params(cfg: TrackingSetup) -> dict[str, float]:
     """Every parameter a sweep may set (``python -m experiments sweep vessel_tracking --param …``)."""
-    return {"gate": cfg.gate, "speed": cfg.speeds[0], "turn_radius": cfg.turn_radius,
-            "turn_start": cfg.turn_start, "turn_angle_deg": cfg.turn_angle_deg, "range_std": cfg.range_std,
-            "cross_range_std": cfg.cross_range_std}
+    return {
+        "gate": cfg.gate,
+        "speed": cfg.speeds[0],
+        "turn_radius": cfg.turn_radius,
+        "turn_start": cfg.turn_start,
+        "turn_angle_deg": cfg.turn_angle_deg,
+        "range_std": cfg.range_std,
+        "cross_range_std": cfg.cross_range_std,
+    }
 
 
 def simulate(cfg: TrackingSetup, key: jax.Array, p: dict[str, Any]) -> RadarRun:
@@ -110,16 +116,23 @@ def simulate(cfg: TrackingSetup, key: jax.Array, p: dict[str, Any]) -> RadarRun:
     sensor = radar(p["range_std"], p["cross_range_std"] / cfg.target_range, period=cfg.scan_period)
     times = scan_times(sensor, cfg.t_final)
     f = lambda v: jnp.asarray(v, float)  # noqa: E731  (no value checks: the MC engine traces with zeros)
-    m = VesselManoeuvre(f(p["speed"]), f(p["turn_radius"]), f(p["turn_start"]), jnp.deg2rad(f(p["turn_angle_deg"])),
-                        f(0.0), f((-600.0, cfg.target_range)))
+    m = VesselManoeuvre(
+        f(p["speed"]),
+        f(p["turn_radius"]),
+        f(p["turn_start"]),
+        jnp.deg2rad(f(p["turn_angle_deg"])),
+        f(0.0),
+        f((-600.0, cfg.target_range)),
+    )
     truth = vessel_state(m, times)
     z = measure(sensor, key, truth.position)
     R = cartesian_covariance(sensor, truth.position[0])
     return RadarRun(z, truth.position, times, m.turn_start, m.turn_end, R)
 
 
-def window_tracks(cfg: TrackingSetup, sc: RadarRun, selectors: dict[str, WindowSelector], *,
-                  smooth: bool = False) -> tuple[dict[str, Track], dict[str, Any]]:
+def window_tracks(
+    cfg: TrackingSetup, sc: RadarRun, selectors: dict[str, WindowSelector], *, smooth: bool = False
+) -> tuple[dict[str, Track], dict[str, Any]]:
     """Fixed-window trackers and the fuzzy selectors on one bank; also each selector's :class:`Selection`."""
     bank = window_bank_filter(sc.z, cfg.max_window, cfg.scan_period)
     tracks, selections = {}, {}
@@ -137,10 +150,17 @@ def all_tracks(cfg: TrackingSetup, sc: RadarRun, selectors: dict[str, WindowSele
     """:func:`window_tracks` plus the CV Kalman filter and the IMM (both from a one-plot start)."""
     tracks, selections = window_tracks(cfg, sc, selectors)
     tracks["kalman_cv"] = kalman_cv_track(sc.z, sc.R, cfg.scan_period, cfg.kalman_q, cfg.velocity_prior_std)
-    tracks["imm"] = imm_cv_ct_track(sc.z, sc.R, cfg.scan_period, q_cv=cfg.imm_q_cv, q_ct=cfg.imm_q_ct,
-                                    q_turn_rate=cfg.imm_q_turn_rate, switch_prob=cfg.imm_switch_prob,
-                                    velocity_prior_std=cfg.velocity_prior_std,
-                                    turn_rate_prior_std=cfg.turn_rate_prior_std)
+    tracks["imm"] = imm_cv_ct_track(
+        sc.z,
+        sc.R,
+        cfg.scan_period,
+        q_cv=cfg.imm_q_cv,
+        q_ct=cfg.imm_q_ct,
+        q_turn_rate=cfg.imm_q_turn_rate,
+        switch_prob=cfg.imm_switch_prob,
+        velocity_prior_std=cfg.velocity_prior_std,
+        turn_rate_prior_std=cfg.turn_rate_prior_std,
+    )
     return tracks, selections
 
 
@@ -154,7 +174,6 @@ def phases(cfg: TrackingSetup, sc: RadarRun) -> tuple[jax.Array, jax.Array, jax.
 
 def paper_selector(cfg: TrackingSetup) -> WindowSelector:
     return window_selector(cfg.max_window, cfg.slope, cfg.centre, kappa=cfg.kappa, tnorm=cfg.tnorm)
-
 
 
 def _masked_max(x: jax.Array, mask: jax.Array) -> jax.Array:
@@ -223,12 +242,14 @@ def loss_metric(cfg: TrackingSetup, selectors: dict[str, WindowSelector], gates:
     return metric
 
 
-
 def loss_space(cfg: TrackingSetup) -> dict[str, Any]:
     """The track-loss population: speed uniform in ``speed_range``, turn start uniform within a scan."""
     lo, hi = cfg.speed_range
-    return {**nominal_params(cfg), "speed": uniform(lo, hi),
-            "turn_start": uniform(cfg.turn_start, cfg.turn_start + cfg.scan_period)}
+    return {
+        **nominal_params(cfg),
+        "speed": uniform(lo, hi),
+        "turn_start": uniform(cfg.turn_start, cfg.turn_start + cfg.scan_period),
+    }
 
 
 def training_batch(cfg: TrackingSetup, key: jax.Array, n: int) -> tuple[Any, RadarRun, jax.Array]:
@@ -246,8 +267,16 @@ def training_batch(cfg: TrackingSetup, key: jax.Array, n: int) -> tuple[Any, Rad
     return jax.jit(jax.vmap(one))(jax.random.split(k_noise, n), speeds, starts)
 
 
-def surrogate_loss(cfg: TrackingSetup, sel: WindowSelector, banks: Any, z: jax.Array, checked: jax.Array, gate: Any, *,
-                   smooth: bool = True) -> jax.Array:
+def surrogate_loss(
+    cfg: TrackingSetup,
+    sel: WindowSelector,
+    banks: Any,
+    z: jax.Array,
+    checked: jax.Array,
+    gate: Any,
+    *,
+    smooth: bool = True,
+) -> jax.Array:
     """Mean soft probability of loss over a batch (smooth selector and soft gate); with
     ``smooth=False`` the exact selector (still the soft gate)."""
 
@@ -259,7 +288,9 @@ def surrogate_loss(cfg: TrackingSetup, sel: WindowSelector, banks: Any, z: jax.A
     return jnp.mean(jax.vmap(one)(banks, z, checked))
 
 
-def exact_batch_loss(cfg: TrackingSetup, sel: WindowSelector, banks: Any, z: jax.Array, checked: jax.Array, gate: Any) -> jax.Array:
+def exact_batch_loss(
+    cfg: TrackingSetup, sel: WindowSelector, banks: Any, z: jax.Array, checked: jax.Array, gate: Any
+) -> jax.Array:
     """Fraction of the batch's runs lost (exact selector, exact gate)."""
 
     def one(bank, z_, mask):
@@ -267,7 +298,6 @@ def exact_batch_loss(cfg: TrackingSetup, sel: WindowSelector, banks: Any, z: jax
         return track_lost(miss_distances(z_, predicted_plots(select_estimates(bank, s.weights))), gate, mask)
 
     return jnp.mean(jax.vmap(one)(banks, z, checked).astype(float))
-
 
 
 def selector_problem(cfg: TrackingSetup, key: jax.Array, runs: int) -> tuple[Problem, Callable]:
@@ -281,8 +311,10 @@ def selector_problem(cfg: TrackingSetup, key: jax.Array, runs: int) -> tuple[Pro
         return surrogate_loss(cfg, with_memberships(sel0, p), banks, sc.z, checked, cfg.gate)
 
     clip = float(sel0.clip)
-    space = ParamSpace(slopes=Param(lo=1e-6, hi=1e3, init=sel0.slopes, reparam=Positive()),
-                       centres=Param(lo=0.0, hi=clip, init=sel0.centres))
+    space = ParamSpace(
+        slopes=Param(lo=1e-6, hi=1e3, init=sel0.slopes, reparam=Positive()),
+        centres=Param(lo=0.0, hi=clip, init=sel0.centres),
+    )
     exact = jax.jit(lambda s: exact_batch_loss(cfg, s, banks, sc.z, checked, cfg.gate))
     return Problem.from_loss("window_selector", space, loss), exact
 
@@ -290,4 +322,3 @@ def selector_problem(cfg: TrackingSetup, key: jax.Array, runs: int) -> tuple[Pro
 def with_memberships(sel: WindowSelector, p: dict[str, Any]) -> WindowSelector:
     """``sel`` with the ``slopes`` and ``centres`` of ``p``."""
     return dataclasses.replace(sel, slopes=p["slopes"], centres=p["centres"])
-

@@ -112,9 +112,13 @@ def test_reference_velocity_applies_lambda_in_body_frame():
     target = jnp.array([[1.0, 2.0, 3.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])  # on target, heading 0
     lam = jnp.asarray(PAPER_LAMBDA)
     nu_r = np.asarray(reference_velocity(lam, eta, target))
-    t_inv = np.array([[1.0, 0.0, -np.sin(theta)],
-                      [0.0, np.cos(phi), np.cos(theta) * np.sin(phi)],
-                      [0.0, -np.sin(phi), np.cos(theta) * np.cos(phi)]])
+    t_inv = np.array(
+        [
+            [1.0, 0.0, -np.sin(theta)],
+            [0.0, np.cos(phi), np.cos(theta) * np.sin(phi)],
+            [0.0, -np.sin(phi), np.cos(theta) * np.cos(phi)],
+        ]
+    )
     e_att = -np.array([phi, theta, psi])  # Θ* = 0
     np.testing.assert_allclose(nu_r[3:], np.asarray(PAPER_LAMBDA[3:]) * (t_inv @ e_att), atol=1e-12)
     assert np.abs(nu_r[3:] - t_inv @ (np.asarray(PAPER_LAMBDA[3:]) * e_att)).max() > 1e-3

@@ -23,6 +23,8 @@ def _rotated(block: np.ndarray, seed: int = 0) -> np.ndarray:
 
 
 CENTER = _rotated(np.array([[0.0, 2.0, 0.0], [-2.0, 0.0, 0.0], [0.0, 0.0, -1.0]]))  # λ = ±2i, −1
+
+
 def _rel(x, ref):
     return np.linalg.norm(np.asarray(x) - ref) / np.linalg.norm(ref)
 
@@ -33,30 +35,42 @@ ROTATION = np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])  
 # --- Lyapunov / Stein / Sylvester with no unique solution ------------------------------------
 
 
-@pytest.mark.parametrize("a", [
-    np.zeros((2, 2)),                         # every eigenvalue 0
-    np.array([[0.0, 1.0], [-1.0, 0.0]]),      # λ = ±i
-    CENTER,                                   # λ = ±2i after a rotation (no exact zeros)
-    np.diag([-1.0, 0.0, -2.0]),               # a zero eigenvalue: λ_i + λ_i = 0
-])
+@pytest.mark.parametrize(
+    "a",
+    [
+        np.zeros((2, 2)),  # every eigenvalue 0
+        np.array([[0.0, 1.0], [-1.0, 0.0]]),  # λ = ±i
+        CENTER,  # λ = ±2i after a rotation (no exact zeros)
+        np.diag([-1.0, 0.0, -2.0]),  # a zero eigenvalue: λ_i + λ_i = 0
+    ],
+)
 def test_singular_continuous_lyapunov_raises(a):
     # Was: an all-NaN X without a word.
-    with pytest.raises(ValueError, match=r"^a: the continuous Lyapunov equation .* is singular: "
-                                         r"eigenvalues λ_i = .* and λ_j = .* of a give \|λ_i \+ λ_j\| = "):
+    with pytest.raises(
+        ValueError,
+        match=r"^a: the continuous Lyapunov equation .* is singular: "
+        r"eigenvalues λ_i = .* and λ_j = .* of a give \|λ_i \+ λ_j\| = ",
+    ):
         solve_continuous_lyapunov(a, np.eye(a.shape[0]))
 
 
 @pytest.mark.parametrize("a", [np.diag([2.0, 0.5]), ROTATION, np.eye(2), _rotated(np.diag([-1.0, 0.3]), 1)])
 def test_singular_stein_equation_raises(a):
-    with pytest.raises(ValueError, match=r"^a: the discrete Lyapunov \(Stein\) equation .* is singular: "
-                                         r".*λ_i·λ_j"):
+    with pytest.raises(
+        ValueError,
+        match=r"^a: the discrete Lyapunov \(Stein\) equation .* is singular: "
+        r".*λ_i·λ_j",
+    ):
         solve_discrete_lyapunov(a, np.eye(2))
 
 
 def test_singular_sylvester_raises_naming_both_spectra():
     a, b = np.array([[1.0, 2.0], [0.0, 3.0]]), np.array([[-3.0]])
-    with pytest.raises(ValueError, match=r"^a, b: the Sylvester equation .* is singular: λ_i = 3.* of a and "
-                                         r"μ_j = -3.* of b"):
+    with pytest.raises(
+        ValueError,
+        match=r"^a, b: the Sylvester equation .* is singular: λ_i = 3.* of a and "
+        r"μ_j = -3.* of b",
+    ):
         solve_sylvester(a, b, np.ones((2, 1)))
 
 
@@ -101,10 +115,12 @@ def test_zero_denominator_is_rejected():
 
 TRI = fz.terms("triangular", [[-2.0, -1.0, 0.0], [-1.0, 0.0, 1.0], [0.0, 1.0, 2.0]])
 SUGENO = fz.sugeno([TRI], [-1.0, 0.0, 1.0], fz.rule_base([[0], [1], [2]], [0, 1, 2]))
-MAMDANI = fz.mamdani([TRI, TRI], jnp.linspace(-2.0, 2.0, 41), TRI, fz.grid_rule_base(np.array(
-    [[0, 0, 1], [0, 1, 2], [1, 2, 2]])))
-BISECTOR = fz.mamdani([TRI], jnp.linspace(-2.0, 2.0, 41), TRI, fz.rule_base([[0], [1], [2]], [0, 1, 2]),
-                      defuzzifier="bisector")
+MAMDANI = fz.mamdani(
+    [TRI, TRI], jnp.linspace(-2.0, 2.0, 41), TRI, fz.grid_rule_base(np.array([[0, 0, 1], [0, 1, 2], [1, 2, 2]]))
+)
+BISECTOR = fz.mamdani(
+    [TRI], jnp.linspace(-2.0, 2.0, 41), TRI, fz.rule_base([[0], [1], [2]], [0, 1, 2]), defuzzifier="bisector"
+)
 TSUKAMOTO = fz.tsukamoto([TRI], fz.terms("sigmoid", [[-1.0, 4.0], [1.0, 4.0]]), fz.rule_base([[0], [2]], [0, 1]))
 SYSTEMS = {"sugeno": SUGENO, "mamdani": MAMDANI, "bisector": BISECTOR, "tsukamoto": TSUKAMOTO}
 
@@ -125,11 +141,14 @@ def test_nan_input_under_jit_propagates_nan(name):
     assert np.isfinite(float(jax.jit(fz.evaluate)(fis, jnp.zeros(fis.n_inputs) + 0.3)))
 
 
-@pytest.mark.parametrize("fis, x, want", [
-    (SUGENO, jnp.array([0.5, 3.0]), 1),  # was: the extra entry ignored
-    (MAMDANI, jnp.array([0.5]), 2),      # was: the missing entry read out of bounds (clamped)
-    (MAMDANI, jnp.array([[0.5, 0.5]]), 2),
-])
+@pytest.mark.parametrize(
+    "fis, x, want",
+    [
+        (SUGENO, jnp.array([0.5, 3.0]), 1),  # was: the extra entry ignored
+        (MAMDANI, jnp.array([0.5]), 2),  # was: the missing entry read out of bounds (clamped)
+        (MAMDANI, jnp.array([[0.5, 0.5]]), 2),
+    ],
+)
 def test_input_of_the_wrong_length_is_rejected(fis, x, want):
     with pytest.raises(ValueError, match="^" + re.escape(f"x: expected shape ({want},), got {tuple(x.shape)}")):
         fz.evaluate(fis, x)

@@ -42,8 +42,12 @@ def test_linear_characteristics_reproduce_tables_1_and_2(seed):
         i = fz.linear(ki) if structure == "PI" else None
         for source, order in (("reference", 0), ("reference", 1), ("disturbance", 0), ("disturbance", 1)):
             mag = rng.uniform(0.1, 2.0)
-            kw = {("reference", 0): "g", ("reference", 1): "g_slope", ("disturbance", 0): "f",
-                  ("disturbance", 1): "f_slope"}[(source, order)]
+            kw = {
+                ("reference", 0): "g",
+                ("reference", 1): "g_slope",
+                ("disturbance", 0): "f",
+                ("disturbance", 1): "f_slope",
+            }[(source, order)]
             op = steady_state_error(plant, k, fz.linear(kp), i, **{kw: mag})
             table = paper_table_error(plant, structure, source, order, k, kp, ki, mag)
             if np.isinf(table):

@@ -20,8 +20,9 @@ TS = 0.01
 def setup():
     x_eq, u_eq, _ = hover_equilibrium(FEEDBACK_MANUFACTURER, -0.05)
     lin = linearize_at(FEEDBACK_MANUFACTURER, x_eq, u_eq)
-    params = design(lin, x_eq, u_eq, np.diag([40.0, 25, 1, 1, 1, 1, 1]), np.eye(2) * 0.2,
-                    np.eye(7) * 1e-2, np.eye(2) * 1e-6, TS)
+    params = design(
+        lin, x_eq, u_eq, np.diag([40.0, 25, 1, 1, 1, 1, 1]), np.eye(2) * 0.2, np.eye(7) * 1e-2, np.eye(2) * 1e-6, TS
+    )
 
     def f(p, x, u, t):
         return lin.a @ (x - p[0]) + lin.b @ (u - p[1])
@@ -49,8 +50,7 @@ def test_linear_plant_tracks_a_constant_reference_without_offset(setup):
     ctrl, est = lqg_tracker(params)
     target = np.asarray(params.y_eq) + np.array([0.1, -0.2])
     loop = ClosedLoop(plant, ctrl, reference=Constant(target), estimator=est)
-    traj = simulate(loop, jnp.asarray(x_eq), Timing(t_final=40.0, dt=TS, save_every=100),
-                    solver=ExponentialEuler())
+    traj = simulate(loop, jnp.asarray(x_eq), Timing(t_final=40.0, dt=TS, save_every=100), solver=ExponentialEuler())
     np.testing.assert_allclose(traj.y[-1], target, atol=1e-6)
     np.testing.assert_allclose(traj.x_hat[-1], traj.x[-1], atol=1e-6)  # the observer converged
 
@@ -60,8 +60,9 @@ def test_design_is_differentiable_in_the_weights(setup):
     x_eq_, u_eq = jnp.asarray(x_eq), jnp.zeros(2)
 
     def rho(logw):
-        p = design(lin, x_eq_, u_eq, jnp.diag(jnp.exp(logw[:7])), jnp.eye(2) * 0.2,
-                   jnp.eye(7) * 1e-2, jnp.eye(2) * 1e-6, TS)
+        p = design(
+            lin, x_eq_, u_eq, jnp.diag(jnp.exp(logw[:7])), jnp.eye(2) * 0.2, jnp.eye(7) * 1e-2, jnp.eye(2) * 1e-6, TS
+        )
         return jnp.sum(sampled_closed_loop_matrix(lin, p, TS) ** 2)
 
     logw = np.log(np.array([40.0, 25, 1, 1, 1, 1, 1]))

@@ -27,8 +27,9 @@ def test_lqr_matches_python_control():
     res = lqr(A, B, Q, R)
     assert _rel(res.k, k_ref) < 1e-10
     assert _rel(res.p, s_ref) < 1e-10
-    np.testing.assert_allclose(np.sort_complex(np.linalg.eigvals(A - B @ np.asarray(res.k))),
-                               np.sort_complex(e_ref), rtol=1e-9)
+    np.testing.assert_allclose(
+        np.sort_complex(np.linalg.eigvals(A - B @ np.asarray(res.k))), np.sort_complex(e_ref), rtol=1e-9
+    )
 
 
 def test_dlqr_matches_python_control():
@@ -65,8 +66,9 @@ def test_discrete_kalman_matches_control_dlqe_and_joseph_posterior():
 def test_lqg_closed_loop_spectrum_is_the_union_of_regulator_and_observer_spectra():
     res = lqg(A, B, C, Q, R, np.eye(5), np.diag([0.1, 0.2]))
     closed = np.linalg.eigvals(np.asarray(feedback_matrix(A, B, C, res.controller)))
-    expected = np.concatenate([np.linalg.eigvals(A - B @ np.asarray(res.regulator.k)),
-                               np.linalg.eigvals(A - np.asarray(res.observer.l) @ C)])
+    expected = np.concatenate(
+        [np.linalg.eigvals(A - B @ np.asarray(res.regulator.k)), np.linalg.eigvals(A - np.asarray(res.observer.l) @ C)]
+    )
     np.testing.assert_allclose(np.sort_complex(closed), np.sort_complex(expected), rtol=1e-8, atol=1e-9)
     assert closed.real.max() < 0
 

@@ -23,10 +23,12 @@ LYAP_CASES = [
 ]
 SYLV_CASES = [
     (np.array([[1, 2], [0, 4.0]]), np.array([[5, 6], [0, 8.0]]), np.array([[9, 10], [11, 12.0]])),
-    (np.array([[1.0, 0, 0, 0], [0, 1.0, 2.0, 0.0], [0, 0, 3.0, -4], [0, 0, 2, 5]]),
-     np.array([[2.0, 0, 0, 1.0], [0, 1.0, 0.0, 0.0], [0, 0, 1.0, -1], [0, 0, 1, 1]]), np.eye(4)),
-    (np.array([[8, 1, 6], [3, 5, 7], [4, 9, 2.0]]), np.array([[2, 3], [4, 5.0]]),
-     np.array([[1, 2], [3, 4], [5, 6.0]])),
+    (
+        np.array([[1.0, 0, 0, 0], [0, 1.0, 2.0, 0.0], [0, 0, 3.0, -4], [0, 0, 2, 5]]),
+        np.array([[2.0, 0, 0, 1.0], [0, 1.0, 0.0, 0.0], [0, 0, 1.0, -1], [0, 0, 1, 1]]),
+        np.eye(4),
+    ),
+    (np.array([[8, 1, 6], [3, 5, 7], [4, 9, 2.0]]), np.array([[2, 3], [4, 5.0]]), np.array([[1, 2], [3, 4], [5, 6.0]])),
 ]
 
 
@@ -68,7 +70,7 @@ def test_lyapunov_gradients_match_finite_differences_in_both_modes():
 
     for f in (cont, disc):
         ga, gq = jax.grad(f, argnums=(0, 1))(a, q)
-        for (i, j) in [(0, 1), (2, 3), (3, 3)]:
+        for i, j in [(0, 1), (2, 3), (3, 3)]:
             e = np.zeros((4, 4))
             e[i, j] = 1.0
             np.testing.assert_allclose(ga[i, j], _central(lambda v: f(v, q), a, e), rtol=1e-6, atol=1e-9)

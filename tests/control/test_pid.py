@@ -55,8 +55,9 @@ def test_derivative_filter_matches_backward_euler_closed_form():
 
 
 def _windup_run(mode: str):
-    loop = ClosedLoop(astatic_plant(), pid(kp=2.0, ki=4.0, u_min=-0.3, u_max=0.3, anti_windup=mode),
-                      reference=Step(1.0))
+    loop = ClosedLoop(
+        astatic_plant(), pid(kp=2.0, ki=4.0, u_min=-0.3, u_max=0.3, anti_windup=mode), reference=Step(1.0)
+    )
     return simulate(loop, jnp.zeros(2), Timing(t_final=8.0, dt=1e-3))
 
 
@@ -83,20 +84,22 @@ def test_clamping_freezes_the_integral_while_saturated():
 def test_pid_gradients_through_saturation_are_finite():
     def loss(kp):
         ctrl = dataclasses.replace(pid(kp=1.0), params=PIDParams(kp=kp, ki=1.0, u_min=-0.5, u_max=0.5))
-        tr = simulate(ClosedLoop(static_plant(), ctrl, reference=Step(1.0)), jnp.zeros(2),
-                      Timing(t_final=2.0, dt=1e-2))
+        tr = simulate(ClosedLoop(static_plant(), ctrl, reference=Step(1.0)), jnp.zeros(2), Timing(t_final=2.0, dt=1e-2))
         return jnp.sum((tr.r - tr.y) ** 2)
 
     assert np.isfinite(float(jax.grad(loss)(2.0)))
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    ({"tf": -0.1}, "tf: must be non-negative"),
-    ({"kp": float("nan")}, "kp: must be finite"),
-    ({"u_min": 1.0, "u_max": -1.0}, "u_min/u_max"),
-    ({"anti_windup": "magic"}, "anti_windup"),
-    ({"tt": 0.0}, "tt: must be positive"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"tf": -0.1}, "tf: must be non-negative"),
+        ({"kp": float("nan")}, "kp: must be finite"),
+        ({"u_min": 1.0, "u_max": -1.0}, "u_min/u_max"),
+        ({"anti_windup": "magic"}, "anti_windup"),
+        ({"tt": 0.0}, "tt: must be positive"),
+    ],
+)
 def test_bad_pid_parameters(kwargs, match):
     with pytest.raises(ValueError, match=match):
         pid(**kwargs)

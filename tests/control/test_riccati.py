@@ -47,8 +47,10 @@ def _check_or_report(label, diff, res_ref, res, kappa_fn):
     if diff <= 1e-9:
         return None
     kappa = kappa_fn() if res_ref <= 1e-12 else float("nan")  # the estimate is only needed here
-    line = (f"{label}: rel. diff vs SciPy {diff:.2e}, residual SciPy {res_ref:.1e} ours {res:.1e}, "
-            f"condition estimate {kappa:.1e}")
+    line = (
+        f"{label}: rel. diff vs SciPy {diff:.2e}, residual SciPy {res_ref:.1e} ours {res:.1e}, "
+        f"condition estimate {kappa:.1e}"
+    )
     assert not (res_ref <= 1e-12 and kappa * EPS <= 1e-10), "should have agreed to 1e-9: " + line
     assert res <= max(10 * res_ref, 1e-13), line
     return line
@@ -67,17 +69,24 @@ def _compare(name, a, b, q, r, discrete):
         except np.linalg.LinAlgError:  # SciPy finds no solution (CAREX 19): the target test covers it
             return
     diff = np.linalg.norm(x - x_ref) / np.linalg.norm(x_ref)
-    line = _check_or_report(f"{name} (n={a.shape[0]})", diff, residual(x_ref, a, b, q, r),
-                            residual(x, a, b, q, r),
-                            lambda: condition_estimate(x_ref, a, b, q, r, discrete))
+    line = _check_or_report(
+        f"{name} (n={a.shape[0]})",
+        diff,
+        residual(x_ref, a, b, q, r),
+        residual(x, a, b, q, r),
+        lambda: condition_estimate(x_ref, a, b, q, r, discrete),
+    )
     if line:
-        warnings.warn("reported, not held to 1e-9 — " + line, UserWarning)
+        warnings.warn("reported, not held to 1e-9 — " + line, UserWarning, stacklevel=2)
 
 
 def _meets_scipys_target(name, a, b, q, r, discrete):
     """Largest residual entry ≤ SciPy's target for the case (or ≤ SciPy's own where it has none)."""
-    ours_fn, ref_fn, residual = ((solve_discrete_are, sl.solve_discrete_are, scipy_dare_residual) if discrete
-                                 else (solve_continuous_are, sl.solve_continuous_are, scipy_care_residual))
+    ours_fn, ref_fn, residual = (
+        (solve_discrete_are, sl.solve_discrete_are, scipy_dare_residual)
+        if discrete
+        else (solve_continuous_are, sl.solve_continuous_are, scipy_care_residual)
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MarginalStabilityWarning)
         x = np.asarray(ours_fn(a, b, q, r))
@@ -162,13 +171,18 @@ def test_1000_random_stabilisable_systems_against_scipy(discrete):
             diff = np.linalg.norm(x[i] - x_ref) / np.linalg.norm(x_ref)
             assert np.isfinite(diff), (n, m, i)
             line = _check_or_report(
-                f"n={n} m={m} #{i}", diff, residual(x_ref, a[i], b[i], q[i], r[i]),
+                f"n={n} m={m} #{i}",
+                diff,
+                residual(x_ref, a[i], b[i], q[i], r[i]),
                 residual(x[i], a[i], b[i], q[i], r[i]),
-                lambda: condition_estimate(x_ref, a[i], b[i], q[i], r[i], discrete))  # noqa: B023
+                lambda: condition_estimate(x_ref, a[i], b[i], q[i], r[i], discrete),
+            )  # noqa: B023
             if line:
                 reported.append(line)
     if reported:
-        warnings.warn(f"{len(reported)} of 1000 random systems reported: " + "; ".join(reported), UserWarning)
+        warnings.warn(
+            f"{len(reported)} of 1000 random systems reported: " + "; ".join(reported), UserWarning, stacklevel=2
+        )
     assert len(reported) <= 10  # random well-scaled systems: essentially all are held to 1e-9
 
 
@@ -296,8 +310,7 @@ def test_nearly_unstabilisable_mode_is_solved_like_scipy(eps):
 
 
 @settings(max_examples=25, deadline=None, derandomize=True)
-@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 5), m=st.integers(1, 2), discrete=st.booleans(),
-       data=st.data())
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 5), m=st.integers(1, 2), discrete=st.booleans(), data=st.data())
 def test_state_unit_scaling_changes_neither_verdict_nor_residual(seed, n, m, discrete, data):
     """Random stabilisable systems rewritten in other state units ``x = T x̃``, ``T = diag(10^k)``,
     ``|k| ≤ 6``: solved in both coordinates, the same solution (back-transformed), the
@@ -328,15 +341,15 @@ def test_double_integrator_in_nanometres():
     a = np.array([[0.0, 1.0], [0.0, 0.0]]) * (t[:, None] / t[None, :])
     b = np.array([[0.0], [1.0]])
     q = np.diag([1.0, 1.0]) / np.outer(t, t)
-    for solve, ref in ((solve_continuous_are, sl.solve_continuous_are),
-                       (solve_discrete_are, sl.solve_discrete_are)):
+    for solve, ref in ((solve_continuous_are, sl.solve_continuous_are), (solve_discrete_are, sl.solve_discrete_are)):
         aa = a if solve is solve_continuous_are else np.eye(2) + 0.1 * a
         x = np.asarray(solve(aa, b, q, np.eye(1)))
         x_ref = ref(aa, b, q, np.eye(1))
         np.testing.assert_allclose(x, x_ref, rtol=1e-9)
         discrete = solve is solve_discrete_are
         assert _componentwise_residual(x, aa, b, q, np.eye(1), discrete) <= max(
-            _componentwise_residual(x_ref, aa, b, q, np.eye(1), discrete), 64 * np.finfo(float).eps)
+            _componentwise_residual(x_ref, aa, b, q, np.eye(1), discrete), 64 * np.finfo(float).eps
+        )
 
 
 def test_input_validation_names_the_argument():

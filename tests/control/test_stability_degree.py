@@ -43,10 +43,18 @@ def test_pi_triple_root_design_on_the_astatic_plant():
     np.testing.assert_allclose(d.char_poly, 0.1 * np.poly([-1 / (3 * T)] * 3), rtol=1e-12)
 
 
-@pytest.mark.parametrize("plant, structure, tf", [
-    (STATIC, "P", 0.0), (ASTATIC, "P", 0.0), (STATIC, "PI", 0.0), (ASTATIC, "PI", 0.0),
-    (STATIC, "PD", 0.05), (ASTATIC, "PD", 0.05), (STATIC, "PID", 0.05),
-])
+@pytest.mark.parametrize(
+    "plant, structure, tf",
+    [
+        (STATIC, "P", 0.0),
+        (ASTATIC, "P", 0.0),
+        (STATIC, "PI", 0.0),
+        (ASTATIC, "PI", 0.0),
+        (STATIC, "PD", 0.05),
+        (ASTATIC, "PD", 0.05),
+        (STATIC, "PID", 0.05),
+    ],
+)
 def test_no_nearby_gain_has_a_larger_stability_degree(plant, structure, tf):
     d = max_stability_degree(*plant, structure, tf=tf)
     k0 = np.array(list(d.gains.values()))

@@ -24,8 +24,11 @@ def test_tables_equal_the_final_value_theorem(seed):
     K, T1, T2 = rng.uniform(0.5, 3.0), rng.uniform(0.05, 0.5), rng.uniform(0.05, 0.5)
     num, den = _plant(kind, K, T1, T2)
     while True:
-        kp, ki, kd = rng.uniform(0.1, 2.0), rng.uniform(0.1, 2.0) * (structure == "PI"), \
-            rng.uniform(0.01, 0.2) * (structure == "PD")
+        kp, ki, kd = (
+            rng.uniform(0.1, 2.0),
+            rng.uniform(0.1, 2.0) * (structure == "PI"),
+            rng.uniform(0.01, 0.2) * (structure == "PD"),
+        )
         gains = {"P": [kp], "PI": [kp, ki], "PD": [kp, kd]}[structure]
         if stability_degree(characteristic_polynomial(num, den, structure, gains, 0.02)) > 0:
             break

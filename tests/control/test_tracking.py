@@ -37,8 +37,9 @@ def test_sinusoidal_regulator_equations_hold():
     # the exosystem really generates sin/cos pairs: exp(S t) rotates by ω t
     t = 0.37
     rot = sl.expm(s * t)
-    np.testing.assert_allclose(rot[:2, :2], [[np.cos(0.7 * t), np.sin(0.7 * t)],
-                                              [-np.sin(0.7 * t), np.cos(0.7 * t)]], atol=1e-12)
+    np.testing.assert_allclose(
+        rot[:2, :2], [[np.cos(0.7 * t), np.sin(0.7 * t)], [-np.sin(0.7 * t), np.cos(0.7 * t)]], atol=1e-12
+    )
 
 
 @pytest.mark.parametrize("exo_kind", ["constant", "sinusoid"])
@@ -54,8 +55,7 @@ def test_tracking_error_vanishes_in_closed_loop(exo_kind):
         return np.concatenate([A @ x + B @ np.asarray(u_of(x, xi)), s @ xi])
 
     t_end = 30.0
-    sol = solve_ivp(rhs, (0, t_end), np.concatenate([np.zeros(4), xi0]), rtol=1e-10, atol=1e-12,
-                    t_eval=[0.0, t_end])
+    sol = solve_ivp(rhs, (0, t_end), np.concatenate([np.zeros(4), xi0]), rtol=1e-10, atol=1e-12, t_eval=[0.0, t_end])
     x, xi = sol.y[:4], sol.y[4:]
     err = C @ x - q_r @ xi
     assert np.abs(err[:, 0]).max() > 0.1  # it starts off the reference

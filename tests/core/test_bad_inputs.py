@@ -63,42 +63,55 @@ def test_matching_vector_signals_still_run():
 
 
 def _plant(output=None, dynamics=None) -> Plant:
-    return dataclasses.replace(PLANT, output=output or PLANT.output, dynamics=dynamics or PLANT.dynamics,
-                               name="user_plant")
+    return dataclasses.replace(
+        PLANT, output=output or PLANT.output, dynamics=dynamics or PLANT.dynamics, name="user_plant"
+    )
 
 
-@pytest.mark.parametrize("output, got", [
-    (lambda p, x: x[0], r"\(\)"),  # a scalar
-    (lambda p, x: x, r"\(2,\)"),   # both states with n_outputs = 1 (was: a 2-channel PID)
-])
+@pytest.mark.parametrize(
+    "output, got",
+    [
+        (lambda p, x: x[0], r"\(\)"),  # a scalar
+        (lambda p, x: x, r"\(2,\)"),  # both states with n_outputs = 1 (was: a 2-channel PID)
+    ],
+)
 def test_plant_output_of_the_wrong_shape_is_rejected(output, got):
     loop = ClosedLoop(_plant(output=output), PID, reference=Step(1.0))
-    with pytest.raises(ValueError, match=rf"^plant 'user_plant': output\(params, x\) returns shape {got}, "
-                                         r"expected \(1,\)"):
+    with pytest.raises(
+        ValueError,
+        match=rf"^plant 'user_plant': output\(params, x\) returns shape {got}, "
+        r"expected \(1,\)",
+    ):
         simulate(loop, X0, TIMING)
 
 
 def test_plant_dynamics_of_the_wrong_shape_is_rejected():
     loop = ClosedLoop(_plant(dynamics=lambda p, x, u, t: jnp.concatenate([x, u])), PID, reference=Step(1.0))
-    with pytest.raises(ValueError, match=r"^plant 'user_plant': dynamics\(params, x, u, t\) returns shape "
-                                         r"\(3,\), expected \(2,\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"^plant 'user_plant': dynamics\(params, x, u, t\) returns shape "
+        r"\(3,\), expected \(2,\)",
+    ):
         fold(loop, X0, TIMING, _ticks_sum, 0.0)
 
 
 # --- signals with non-finite or impossible parameters ----------------------------------------
 
 
-@pytest.mark.parametrize("signal, field", [
-    (Step(jnp.nan), "amplitude"),
-    (Step(jnp.inf), "amplitude"),
-    (Step(1.0, jnp.nan), "t0"),
-    (Ramp(jnp.inf), "slope"),
-    (Sine(1.0, jnp.nan), "frequency"),
-    (Square(1.0, jnp.inf), "period"),
-    (Constant(jnp.array([0.0, -jnp.inf])), "value"),
-    (Piecewise(jnp.array([0.0, jnp.nan]), jnp.array([1.0, 2.0])), "times"),
-    (Sum((Step(1.0), Step(jnp.nan))), r"terms\[1\]\.amplitude"),
-])
+@pytest.mark.parametrize(
+    "signal, field",
+    [
+        (Step(jnp.nan), "amplitude"),
+        (Step(jnp.inf), "amplitude"),
+        (Step(1.0, jnp.nan), "t0"),
+        (Ramp(jnp.inf), "slope"),
+        (Sine(1.0, jnp.nan), "frequency"),
+        (Square(1.0, jnp.inf), "period"),
+        (Constant(jnp.array([0.0, -jnp.inf])), "value"),
+        (Piecewise(jnp.array([0.0, jnp.nan]), jnp.array([1.0, 2.0])), "times"),
+        (Sum((Step(1.0), Step(jnp.nan))), r"terms\[1\]\.amplitude"),
+    ],
+)
 def test_non_finite_signal_parameters_are_rejected(signal, field):
     with pytest.raises(ValueError, match=rf"^reference\.{field}: must be finite"):
         simulate(_loop(reference=signal), X0, TIMING)
@@ -106,13 +119,16 @@ def test_non_finite_signal_parameters_are_rejected(signal, field):
         simulate(_loop(disturbance=signal), X0, TIMING)
 
 
-@pytest.mark.parametrize("signal, message", [
-    (Square(period=0.0), r"^signal\.period: must be positive"),
-    (Square(period=-1.0), r"^signal\.period: must be positive"),
-    (Square(duty=1.5), r"^signal\.duty: must lie in \[0, 1\]"),
-    (Piecewise(jnp.array([0.0, 2.0, 1.0]), jnp.array([1.0, 2.0, 3.0])), r"^signal\.times: must be non-decreasing"),
-    (Sum((Step(1.0), Square(period=0.0))), r"^signal\.terms\[1\]\.period: must be positive"),
-])
+@pytest.mark.parametrize(
+    "signal, message",
+    [
+        (Square(period=0.0), r"^signal\.period: must be positive"),
+        (Square(period=-1.0), r"^signal\.period: must be positive"),
+        (Square(duty=1.5), r"^signal\.duty: must lie in \[0, 1\]"),
+        (Piecewise(jnp.array([0.0, 2.0, 1.0]), jnp.array([1.0, 2.0, 3.0])), r"^signal\.times: must be non-decreasing"),
+        (Sum((Step(1.0), Square(period=0.0))), r"^signal\.terms\[1\]\.period: must be positive"),
+    ],
+)
 def test_impossible_signal_parameters_are_rejected(signal, message):
     with pytest.raises(ValueError, match=message):
         check_signal("signal", signal)
@@ -131,8 +147,11 @@ def test_non_finite_signal_under_jit_propagates_nan():
 
 @pytest.mark.parametrize("timing", [Timing(1e10, 1e-10), Timing(1e12, 1.0)])
 def test_horizon_beyond_the_step_limit_is_rejected(timing):
-    with pytest.raises(ValueError, match=r"^t_final: t_final/dt = 1e\+(20|12) steps exceeds the limit of "
-                                         rf"{rollout.MAX_STEPS}"):
+    with pytest.raises(
+        ValueError,
+        match=r"^t_final: t_final/dt = 1e\+(20|12) steps exceeds the limit of "
+        rf"{rollout.MAX_STEPS}",
+    ):
         fold(_loop(), X0, timing, _ticks_sum, 0.0)
     with pytest.raises(ValueError, match=r"exceeds the limit"):
         tick_times(timing)

@@ -15,7 +15,7 @@ from jaxsim.plants.second_order import static_plant
 TIMING = Timing(t_final=1.5, dt=5e-3, controller_period=1e-2)
 
 
-def _loop(kp=3.0, ki=2.0, reference=Step(1.0), u_max=jnp.inf):
+def _loop(kp=3.0, ki=2.0, reference=Step(1.0), u_max=jnp.inf):  # noqa: B008  (an immutable default)
     return ClosedLoop(static_plant(), pid(kp=kp, ki=ki, u_max=u_max, u_min=-u_max), reference=reference)
 
 
@@ -31,8 +31,12 @@ def test_running_integrals_equal_the_trajectory_metrics(run):
     objective = costs.combine(iae=costs.iae(), ise=costs.ise(), itae=costs.itae(), energy=costs.control_energy())
     got = costs.rollout_cost(objective, loop, jnp.zeros(2), TIMING).terms
     e = tr.r[:, 0] - tr.y[:, 0]
-    expected = {"iae": metrics.iae(tr.t, e), "ise": metrics.ise(tr.t, e), "itae": metrics.itae(tr.t, e),
-                "energy": metrics.control_energy(tr.t, tr.u)}
+    expected = {
+        "iae": metrics.iae(tr.t, e),
+        "ise": metrics.ise(tr.t, e),
+        "itae": metrics.itae(tr.t, e),
+        "energy": metrics.control_energy(tr.t, tr.u),
+    }
     for name, value in expected.items():
         assert float(got[name]) == pytest.approx(float(value), rel=1e-12), name
     # and a hand-written sum, independent of the shared integrands
@@ -66,13 +70,13 @@ def test_saturation_excess_clock_and_terminal_on_handmade_ticks():
     t = jnp.asarray([0.0, 0.1, 0.2])
     r = jnp.asarray([[1.0, 0.0]] * 3)
     y = jnp.asarray([[0.2, 0.1], [0.6, -0.3], [0.9, 0.2]])
-    ticks = costs.Tick(t=t, x=y, y=y, y_meas=y, measured=jnp.ones(3, bool), u=u, r=r, d=jnp.zeros((3, 1)),
-                       x_hat=None)
+    ticks = costs.Tick(t=t, x=y, y=y, y_meas=y, measured=jnp.ones(3, bool), u=u, r=r, d=jnp.zeros((3, 1)), x_hat=None)
     ts = 0.1
     sat = costs.accumulate(costs.saturation_excess(2.0), ticks, ts)
     assert float(sat) == pytest.approx((1.0**2 + 0.5**2 + 2.0**2) * ts, rel=1e-14)
     assert float(costs.accumulate(costs.saturation_excess(2.0, channels=1), ticks, ts)) == pytest.approx(
-        (1.0**2 + 2.0**2) * ts, rel=1e-14)
+        (1.0**2 + 2.0**2) * ts, rel=1e-14
+    )
     clock = costs.itae(clock=lambda tt: jnp.asarray([1.0, 2.0]) + tt)
     e = np.asarray(r - y)
     w = np.asarray(t)[:, None] + np.array([1.0, 2.0])
@@ -111,8 +115,16 @@ def test_combine_rejects_bad_terms():
 
 
 def test_channels_select_outputs_of_a_two_channel_error():
-    ticks = costs.Tick(t=jnp.asarray([0.0, 0.5]), x=None, y=jnp.asarray([[1.0, 2.0], [0.0, 1.0]]), y_meas=None,
-                       measured=None, u=jnp.zeros((2, 1)), r=jnp.asarray([[0.0, 0.0], [0.0, 0.0]]),
-                       d=None, x_hat=None)
+    ticks = costs.Tick(
+        t=jnp.asarray([0.0, 0.5]),
+        x=None,
+        y=jnp.asarray([[1.0, 2.0], [0.0, 1.0]]),
+        y_meas=None,
+        measured=None,
+        u=jnp.zeros((2, 1)),
+        r=jnp.asarray([[0.0, 0.0], [0.0, 0.0]]),
+        d=None,
+        x_hat=None,
+    )
     assert float(costs.accumulate(costs.iae(channels=1), ticks, 0.5)) == pytest.approx(1.5, rel=1e-15)
     assert float(costs.accumulate(costs.ise(channels=[0]), ticks, 0.5)) == pytest.approx(0.5, rel=1e-15)

@@ -73,7 +73,9 @@ def test_discretisation_is_vmappable_and_differentiable():
         np.testing.assert_allclose(ads[i], scipy.linalg.expm(np.asarray(a) * float(d)), rtol=1e-12)
     g = jax.grad(lambda d: c2d_zoh(a, b, d)[0][0, 1])(0.1)
     h = 1e-6
-    fd = (scipy.linalg.expm(np.asarray(a) * (0.1 + h))[0, 1] - scipy.linalg.expm(np.asarray(a) * (0.1 - h))[0, 1]) / (2 * h)
+    fd = (scipy.linalg.expm(np.asarray(a) * (0.1 + h))[0, 1] - scipy.linalg.expm(np.asarray(a) * (0.1 - h))[0, 1]) / (
+        2 * h
+    )
     np.testing.assert_allclose(g, fd, rtol=1e-7)
 
 

@@ -52,8 +52,12 @@ def test_the_sampler_reads_the_output_with_the_previous_input_held():
     np.testing.assert_allclose(np.asarray(tr.y_meas), y_ref, rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(np.asarray(tr.u), u_ref, rtol=1e-12, atol=1e-14)
     # the feedthrough really acts: with D = 0 the loop is different from the first input on
-    no_d = simulate(ClosedLoop(ss(A, B, C, 0.0), P_CONTROLLER, reference=Step(REF)), jnp.zeros(2),
-                    Timing(t_final=1.0, dt=TS), solver=ExponentialEuler())
+    no_d = simulate(
+        ClosedLoop(ss(A, B, C, 0.0), P_CONTROLLER, reference=Step(REF)),
+        jnp.zeros(2),
+        Timing(t_final=1.0, dt=TS),
+        solver=ExponentialEuler(),
+    )
     assert abs(float(no_d.y[1, 0] - tr.y[1, 0])) > 0.1
 
 
@@ -62,8 +66,9 @@ def test_fold_and_gradients_see_the_feedthrough():
 
     def cost(d):
         loop = ClosedLoop(ss(A, B, C, d), P_CONTROLLER, reference=Step(REF))
-        return fold(loop, jnp.zeros(2), timing, lambda acc, tick: acc + tick.y[0] ** 2, 0.0,
-                    solver=ExponentialEuler())[0]
+        return fold(loop, jnp.zeros(2), timing, lambda acc, tick: acc + tick.y[0] ** 2, 0.0, solver=ExponentialEuler())[
+            0
+        ]
 
     y_ref, _ = _expected(20)
     np.testing.assert_allclose(float(cost(D)), float(np.sum(y_ref**2)), rtol=1e-12)
@@ -74,10 +79,20 @@ def test_fold_and_gradients_see_the_feedthrough():
 
 
 def test_a_feedthrough_of_the_wrong_shape_is_rejected_when_the_loop_is_built():
-    plant = Plant(params=None, dynamics=lambda p, x, u, t: -x + u, output=lambda p, x: x,
-                  n_states=1, n_inputs=1, n_outputs=1, name="bad", feedthrough=lambda p, u: jnp.ones(2) * u)
+    plant = Plant(
+        params=None,
+        dynamics=lambda p, x, u, t: -x + u,
+        output=lambda p, x: x,
+        n_states=1,
+        n_inputs=1,
+        n_outputs=1,
+        name="bad",
+        feedthrough=lambda p, u: jnp.ones(2) * u,
+    )
     loop = ClosedLoop(plant, P_CONTROLLER, reference=Step(REF))
-    with pytest.raises(ValueError, match=r"plant 'bad': feedthrough\(params, u\) returns shape \(2,\), expected \(1,\)"):
+    with pytest.raises(
+        ValueError, match=r"plant 'bad': feedthrough\(params, u\) returns shape \(2,\), expected \(1,\)"
+    ):
         simulate(loop, jnp.zeros(1), Timing(t_final=0.1, dt=TS))
     with pytest.raises(ValueError, match=r"feedthrough\(params, u\)"):
         jax.jit(lambda lp: simulate(lp, jnp.zeros(1), Timing(t_final=0.1, dt=TS)).y)(loop)

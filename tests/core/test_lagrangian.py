@@ -11,8 +11,9 @@ from jaxsim.core.lagrangian import body_energy, euler_lagrange, point_force, rot
 
 def test_rotation_is_rodrigues():
     rot = rotation((0, 0, 2.0), 0.3)  # axis normalised
-    np.testing.assert_allclose(rot, [[np.cos(0.3), -np.sin(0.3), 0], [np.sin(0.3), np.cos(0.3), 0], [0, 0, 1]],
-                               atol=1e-15)
+    np.testing.assert_allclose(
+        rot, [[np.cos(0.3), -np.sin(0.3), 0], [np.sin(0.3), np.cos(0.3), 0], [0, 0, 1]], atol=1e-15
+    )
 
 
 def test_compound_pendulum_with_spinning_disc():

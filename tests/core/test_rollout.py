@@ -21,8 +21,13 @@ TEMPLATE = pid(kp=1.0, ki=0.0, kd=0.0, tf=0.02, anti_windup="none")
 
 
 def _loop(params: PIDParams, disturbance_time: float = 0.5, **kw) -> ClosedLoop:
-    return ClosedLoop(PLANT, dataclasses.replace(TEMPLATE, params=params),
-                      reference=Step(1.0), disturbance=Step(0.3, disturbance_time), **kw)
+    return ClosedLoop(
+        PLANT,
+        dataclasses.replace(TEMPLATE, params=params),
+        reference=Step(1.0),
+        disturbance=Step(0.3, disturbance_time),
+        **kw,
+    )
 
 
 def _itae(gains: jax.Array, timing: Timing) -> jax.Array:
@@ -107,8 +112,9 @@ def _exact_model_estimator(period_ticks_dt: float):
 def test_multirate_sensor_and_masked_estimator_updates():
     ts = 1e-2
     sensor = gaussian_sensor(0.0, period=0.1)  # every 10 controller ticks
-    loop = ClosedLoop(PLANT, pid(kp=0.4, ki=0.3), reference=Step(1.0),
-                      sensor=sensor, estimator=_exact_model_estimator(ts))
+    loop = ClosedLoop(
+        PLANT, pid(kp=0.4, ki=0.3), reference=Step(1.0), sensor=sensor, estimator=_exact_model_estimator(ts)
+    )
     tr = simulate(loop, jnp.zeros(2), Timing(t_final=3.0, dt=1e-3, controller_period=ts))
     measured = np.asarray(tr.measured)
     assert measured.sum() == 30 and np.all(np.flatnonzero(measured) % 10 == 0)
@@ -124,12 +130,18 @@ def test_sine_reference_tracking_runs_under_jit_and_vmap_of_the_loop():
     np.testing.assert_allclose(out[1], 2.0 * out[0], rtol=1e-12, atol=1e-15)  # linear loop
 
 
-@pytest.mark.parametrize("timing, match", [
-    (Timing(t_final=1.0, dt=1e-3, controller_period=2.5e-3), "controller_period: must be an integer multiple of dt"),
-    (Timing(t_final=1.0, dt=-1e-3), "dt: must be positive"),
-    (Timing(t_final=1.005, dt=1e-3, controller_period=1e-2), "t_final: must be an integer multiple"),
-    (Timing(t_final=1.0, dt=1e-2, save_every=3), "save_every"),
-])
+@pytest.mark.parametrize(
+    "timing, match",
+    [
+        (
+            Timing(t_final=1.0, dt=1e-3, controller_period=2.5e-3),
+            "controller_period: must be an integer multiple of dt",
+        ),
+        (Timing(t_final=1.0, dt=-1e-3), "dt: must be positive"),
+        (Timing(t_final=1.005, dt=1e-3, controller_period=1e-2), "t_final: must be an integer multiple"),
+        (Timing(t_final=1.0, dt=1e-2, save_every=3), "save_every"),
+    ],
+)
 def test_bad_timing_is_rejected(timing, match):
     with pytest.raises(ValueError, match=match):
         simulate(_loop(PIDParams(kp=1.0)), jnp.zeros(2), timing)
@@ -153,8 +165,9 @@ def test_fold_equals_a_reduction_of_the_stored_trajectory():
     timing = Timing(t_final=2.0, dt=1e-3, controller_period=2e-3)
     tr = simulate(_loop(p), jnp.zeros(2), timing)
     want = metrics.itae(tr.t, tr.r[:, 0] - tr.y[:, 0])
-    got, x_final = fold(_loop(p), jnp.zeros(2), timing,
-                        lambda acc, tk: acc + tk.t * jnp.abs(tk.r[0] - tk.y[0]) * timing.ts, 0.0)
+    got, x_final = fold(
+        _loop(p), jnp.zeros(2), timing, lambda acc, tk: acc + tk.t * jnp.abs(tk.r[0] - tk.y[0]) * timing.ts, 0.0
+    )
     np.testing.assert_allclose(got, want, rtol=1e-13)
     np.testing.assert_array_equal(np.asarray(x_final), np.asarray(tr.x_final))
 

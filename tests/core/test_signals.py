@@ -13,8 +13,9 @@ def test_step_ramp_sine_square_closed_forms():
     t = np.asarray(T)
     np.testing.assert_allclose(sample(Step(2.0, 1.0), T)[:, 0], 2.0 * (t >= 1.0))
     np.testing.assert_allclose(sample(Ramp(0.5, 1.0), T)[:, 0], 0.5 * np.maximum(t - 1.0, 0.0), atol=1e-15)
-    np.testing.assert_allclose(sample(Sine(1.5, 0.25, 0.3, 1.0), T)[:, 0],
-                               1.0 + 1.5 * np.sin(2 * np.pi * 0.25 * t + 0.3), atol=1e-14)
+    np.testing.assert_allclose(
+        sample(Sine(1.5, 0.25, 0.3, 1.0), T)[:, 0], 1.0 + 1.5 * np.sin(2 * np.pi * 0.25 * t + 0.3), atol=1e-14
+    )
     sq = np.asarray(sample(Square(1.0, 2.0, 0.25), T)[:, 0])
     want = np.where(np.mod(t, 2.0) / 2.0 < 0.25, 1.0, -1.0)
     np.testing.assert_array_equal(sq, want)

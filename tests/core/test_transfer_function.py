@@ -99,8 +99,9 @@ def test_tf_to_ss_to_tf_round_trip(tf):
     a, b, c, d = tf2ss(num, den)
     s = _points(np.roots(den))
     # the realisation has the transfer function's frequency response (NumPy resolvent vs polyval)
-    np.testing.assert_allclose(_ss_response(a, b, c, d, s), np.polyval(num, s) / np.polyval(den, s),
-                               rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(
+        _ss_response(a, b, c, d, s), np.polyval(num, s) / np.polyval(den, s), rtol=1e-10, atol=1e-12
+    )
     # and converts back to the same coefficients, normalised to a monic denominator
     num2, den2 = ss2tf(a, b, c, d)
     padded = np.concatenate([np.zeros(len(den) - len(num)), num]) / den[0]

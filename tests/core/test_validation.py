@@ -19,16 +19,19 @@ def test_integer_check_accepts_integers_and_integral_floats_exactly():
     assert v.check_int("k", 0, 0, 3) == 0 and v.check_int("k", 3, 0, 3) == 3
 
 
-@pytest.mark.parametrize("args, message", [
-    (("n", True), "^n: must be a positive integer, got True"),
-    (("n", 2.5), "^n: must be a positive integer, got 2.5"),
-    (("n", float("inf")), "^n: must be a positive integer, got inf"),
-    (("n", 0), "^n: must be a positive integer, got 0"),
-    (("n", np.ones(2)), "^n: must be a positive integer"),
-    (("k", 2.5, 0, 3), "^k: must be an integer, got 2.5"),
-    (("k", 4, 0, 3), r"^k: must be in \[0, 3\], got 4"),
-    (("m", 1, 2), "^m: must be an integer ≥ 2, got 1"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (("n", True), "^n: must be a positive integer, got True"),
+        (("n", 2.5), "^n: must be a positive integer, got 2.5"),
+        (("n", float("inf")), "^n: must be a positive integer, got inf"),
+        (("n", 0), "^n: must be a positive integer, got 0"),
+        (("n", np.ones(2)), "^n: must be a positive integer"),
+        (("k", 2.5, 0, 3), "^k: must be an integer, got 2.5"),
+        (("k", 4, 0, 3), r"^k: must be in \[0, 3\], got 4"),
+        (("m", 1, 2), "^m: must be an integer ≥ 2, got 1"),
+    ],
+)
 def test_integer_check_rejects_with_the_argument_name(args, message):
     with pytest.raises(ValueError, match=message):
         v.check_int(*args)

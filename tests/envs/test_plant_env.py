@@ -22,7 +22,7 @@ from jaxsim.problem.trms import Scenario, TRMSTuning  # noqa: E402
 N = 40  # ticks per rollout: short horizons keep compile and run times small
 
 
-def env_rollout(env, actions, key=jax.random.PRNGKey(0)):
+def env_rollout(env, actions, key=jax.random.PRNGKey(0)):  # noqa: B008  (an immutable default)
     """States before each step, rewards, final state of a jitted single-env rollout."""
 
     @jax.jit
@@ -142,8 +142,15 @@ def test_training_wrappers_truncate_and_auto_reset():
     np.testing.assert_array_equal(np.asarray(s.obs), np.asarray(s0.obs))  # auto-reset
     assert np.all(np.asarray(s.info["steps"]) == 3)
 
-    failing = Task(plant=static_plant(), step_loss=lambda t, r, y, u: 0.0 * t, u_low=-5.0, u_high=5.0,
-                   dt=0.01, x0=jnp.zeros(2), terminate=lambda x: x[0] > 1e-4)
+    failing = Task(
+        plant=static_plant(),
+        step_loss=lambda t, r, y, u: 0.0 * t,
+        u_low=-5.0,
+        u_high=5.0,
+        dt=0.01,
+        x0=jnp.zeros(2),
+        terminate=lambda x: x[0] > 1e-4,
+    )
     w2 = wrap(PlantEnv(failing), episode_length=100, action_repeat=1)
     s = jax.jit(w2.reset)(jax.random.split(jax.random.PRNGKey(0), 1))
     st = jax.jit(w2.step)
@@ -155,8 +162,11 @@ def test_training_wrappers_truncate_and_auto_reset():
 
 
 def test_action_mapping_and_bad_input():
-    env = PlantEnv(Task(plant=static_plant(), step_loss=lambda t, r, y, u: 0.0 * t, u_low=-1.0, u_high=3.0,
-                        dt=0.01, x0=jnp.zeros(2)))
+    env = PlantEnv(
+        Task(
+            plant=static_plant(), step_loss=lambda t, r, y, u: 0.0 * t, u_low=-1.0, u_high=3.0, dt=0.01, x0=jnp.zeros(2)
+        )
+    )
     u = jax.vmap(env.input)(jnp.array([[-1.0], [0.0], [1.0], [7.0]]))
     np.testing.assert_allclose(np.asarray(u[:, 0]), [-1.0, 1.0, 3.0, 3.0])
     assert float(env.action(env.input(jnp.array([0.3])))[0]) == pytest.approx(0.3)
@@ -185,8 +195,9 @@ def test_auv_env_equals_simulate_and_rest_is_equilibrium():
     tr = jax.jit(lambda lp: simulate(lp, jnp.zeros(12), Timing(n * 0.05, 0.01, controller_period=0.05)))(loop)
     np.testing.assert_allclose(np.asarray(xs), np.asarray(tr.x), rtol=0, atol=1e-13)
     target = np.array(jaxsim.envs.auv.DEFAULT_TARGET)
-    expected = (np.sum((target - np.asarray(tr.x)[:, :6]) ** 2, axis=1)
-                + 1e-3 * np.sum((np.asarray(u) / 100.0) ** 2, axis=1)) * 0.05
+    expected = (
+        np.sum((target - np.asarray(tr.x)[:, :6]) ** 2, axis=1) + 1e-3 * np.sum((np.asarray(u) / 100.0) ** 2, axis=1)
+    ) * 0.05
     np.testing.assert_allclose(np.asarray(rewards), -expected, rtol=1e-12)
     assert float(jnp.max(jnp.abs(xs[-1]))) > 1e-3  # the random thrust moved it
 

@@ -19,16 +19,25 @@ def stable(rng: np.random.Generator, n: int, radius: float = 0.95) -> np.ndarray
 
 def random_model(rng: np.random.Generator, n: int = 4, p: int = 2, m: int = 0) -> LinearGaussianSSM:
     return lgssm(
-        F=stable(rng, n), Q=spd(rng, n, 0.3), H=rng.standard_normal((p, n)), R=spd(rng, p, 0.5),
-        m0=rng.standard_normal(n), P0=spd(rng, n), B=rng.standard_normal((n, m)) if m else None,
+        F=stable(rng, n),
+        Q=spd(rng, n, 0.3),
+        H=rng.standard_normal((p, n)),
+        R=spd(rng, p, 0.5),
+        m0=rng.standard_normal(n),
+        P0=spd(rng, n),
+        B=rng.standard_normal((n, m)) if m else None,
     )
 
 
 def random_time_varying(rng: np.random.Generator, t: int, n: int = 3, p: int = 2, m: int = 1) -> LinearGaussianSSM:
     return lgssm(
-        F=np.stack([stable(rng, n) for _ in range(t)]), Q=np.stack([spd(rng, n, 0.3) for _ in range(t)]),
-        H=rng.standard_normal((t, p, n)), R=np.stack([spd(rng, p, 0.5) for _ in range(t)]),
-        m0=rng.standard_normal(n), P0=spd(rng, n), B=rng.standard_normal((t, n, m)),
+        F=np.stack([stable(rng, n) for _ in range(t)]),
+        Q=np.stack([spd(rng, n, 0.3) for _ in range(t)]),
+        H=rng.standard_normal((t, p, n)),
+        R=np.stack([spd(rng, p, 0.5) for _ in range(t)]),
+        m0=rng.standard_normal(n),
+        P0=spd(rng, n),
+        B=rng.standard_normal((t, n, m)),
     )
 
 
@@ -76,5 +85,7 @@ def filterpy_kalman(model: LinearGaussianSSM, y: np.ndarray, u=None, mask=None) 
         if u is None:
             kf.predict(F=get(model.F, k), Q=get(model.Q, k))
         else:
-            kf.predict(u=np.asarray(u[k], float).reshape(-1, 1), B=get(model.B, k), F=get(model.F, k), Q=get(model.Q, k))
+            kf.predict(
+                u=np.asarray(u[k], float).reshape(-1, 1), B=get(model.B, k), F=get(model.F, k), Q=get(model.Q, k)
+            )
     return {k: np.array(v) for k, v in out.items()}

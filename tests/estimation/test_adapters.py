@@ -41,10 +41,18 @@ def _setup():
 
 def _run(estimator):
     plant, _ = _setup()
-    loop = ClosedLoop(plant, pid(kp=1.0, ki=2.0), reference=Step(1.0),
-                      sensor=gaussian_sensor(STD, period=3 * TS), estimator=estimator)
-    sim = jax.jit(lambda lp: simulate(lp, jnp.zeros(2), Timing(t_final=2.0, dt=TS / 10, controller_period=TS),
-                                      key=jax.random.PRNGKey(0), solver=ExponentialEuler()))
+    loop = ClosedLoop(
+        plant, pid(kp=1.0, ki=2.0), reference=Step(1.0), sensor=gaussian_sensor(STD, period=3 * TS), estimator=estimator
+    )
+    sim = jax.jit(
+        lambda lp: simulate(
+            lp,
+            jnp.zeros(2),
+            Timing(t_final=2.0, dt=TS / 10, controller_period=TS),
+            key=jax.random.PRNGKey(0),
+            solver=ExponentialEuler(),
+        )
+    )
     return sim(loop)
 
 
@@ -67,8 +75,9 @@ def test_other_estimators_plug_into_the_rollout(kind):
         gain = current_observer_gain(model.F, model.H, [0.6, 0.7])
         est = luenberger_estimator(model.F, model.B, model.H, gain, np.zeros(2), read="output")
     else:
-        nl = nonlinear_ssm(lambda p, x, u: model.F @ x + model.B @ u, lambda p, x: model.H @ x,
-                           model.Q, model.R, model.m0, model.P0)
+        nl = nonlinear_ssm(
+            lambda p, x, u: model.F @ x + model.B @ u, lambda p, x: model.H @ x, model.Q, model.R, model.m0, model.P0
+        )
         est = ekf_estimator(nl, read="output") if kind == "ekf" else ukf_estimator(nl, alpha=0.8, read="output")
     traj = _run(est)
     if kind == "luenberger":
@@ -105,8 +114,9 @@ def test_one_filter_member_serves_the_scan_the_imm_and_the_closed_loop():
     bank = imm_filter(imm([member], [[1.0]]), imm_init(nl.m0[None], nl.P0[None], [1.0]), y)
     np.testing.assert_allclose(bank.means, scanned.means, rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(scanned.means, kalman_filter(model, y).means, rtol=1e-10, atol=1e-12)
-    closed = _run(filter_estimator(linear_member(model.F, model.Q, model.H, model.R, model.B), model.m0, model.P0,
-                                   read="output"))
+    closed = _run(
+        filter_estimator(linear_member(model.F, model.Q, model.H, model.R, model.B), model.m0, model.P0, read="output")
+    )
     np.testing.assert_array_equal(closed.x_hat, _run(kalman_estimator(model, read="output")).x_hat)
 
 

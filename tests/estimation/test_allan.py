@@ -18,8 +18,9 @@ def test_white_noise_allan_variance(overlapping):
 
     @jax.jit
     def run(keys):
-        return jax.vmap(lambda k: allan_variance(0.3 * jax.random.normal(k, (1024,)), 0.01, sizes,
-                                                 overlapping=overlapping).avar)(keys)
+        return jax.vmap(
+            lambda k: allan_variance(0.3 * jax.random.normal(k, (1024,)), 0.01, sizes, overlapping=overlapping).avar
+        )(keys)
 
     avar = np.asarray(run(jax.random.split(jax.random.PRNGKey(0), RUNS)))
     expected = np.asarray(white_noise_avar(np.array(sizes) * 0.01, 0.09, 0.01))
@@ -34,11 +35,13 @@ def test_random_walk_allan_variance_matches_seed004_closed_form(overlapping):
     """Seed 004 (Allan variance of a discrete Wiener sequence): x_M = Σ V_i T, σ_V = 2, T = 0.1, L = 50."""
     t_s, sigma_v, groups = 0.1, 2.0, 50
     for m in (1, 2, 5, 20):
+
         @jax.jit
         def run(keys, m=m):
             def one(k):
                 x = jnp.cumsum(sigma_v * jax.random.normal(k, (groups * m,)) * t_s)
                 return allan_variance(x, t_s, (m,), overlapping=overlapping).avar[0]
+
             return jax.vmap(one)(keys)
 
         avar = np.asarray(run(jax.random.split(jax.random.PRNGKey(m), RUNS)))

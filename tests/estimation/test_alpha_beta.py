@@ -58,7 +58,7 @@ def test_sliding_window_line_fit_equals_growing_memory_over_last_k_samples():
     k = 6
     fits = sliding_window_fit(z, window=k, degree=1, dt=DT)
     for end in range(k - 1, 25):
-        restarted = growing_memory_filter(z[end - k + 1:end + 1], DT)
+        restarted = growing_memory_filter(z[end - k + 1 : end + 1], DT)
         np.testing.assert_allclose(fits[end - k + 1, 0], restarted.positions[-1], rtol=1e-10, atol=1e-8)
         np.testing.assert_allclose(fits[end - k + 1, 1], restarted.velocities[-1], rtol=1e-10, atol=1e-10)
     bank = window_bank(z[-10:], DT)  # the vessel tracker's tuple j = 2..10
@@ -85,7 +85,7 @@ def test_fixed_gain_alpha_beta_on_noise_free_line_has_no_lag():
     # the error of a constant-velocity target decays as |λ|^k, λ the roots of
     # λ² − (2 − α − β)λ + (1 − α) (|λ| = √0.5 here): no steady-state lag
     err = np.abs(np.asarray(res.positions[:, 0]) - z[:, 0])
-    assert err[-1] < 1e-9 and err[40] < 2.0 * err[20] * 0.5 ** 10
+    assert err[-1] < 1e-9 and err[40] < 2.0 * err[20] * 0.5**10
     capped = growing_memory_filter(z, DT, max_memory=5)
     np.testing.assert_allclose(capped.velocities[1:, 0], 2.0, rtol=1e-12)
 

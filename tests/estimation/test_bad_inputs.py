@@ -127,6 +127,7 @@ def test_small_but_admissible_spread_still_equals_the_kalman_filter(kwargs):
 
 # 3. IMM -------------------------------------------------------------------------------------------
 
+
 def _imm():
     return imm([linear_member(F, Q, H, R), linear_member(F, 10 * Q, H, R)], [[0.95, 0.05], [0.05, 0.95]])
 
@@ -144,12 +145,15 @@ def test_imm_measurement_wider_than_the_members_output_is_rejected():
         imm_update(_imm(), _imm_state(), jnp.asarray(y2[0]))
 
 
-@pytest.mark.parametrize("probs, match", [
-    ((1.5, -0.5), "^probs: probabilities must be non-negative"),  # before: NaN
-    ((1.0, 1.0), "^probs: probabilities must sum to 1"),  # before: silently renormalised
-    ((0.6, 0.3), "^probs: probabilities must sum to 1"),
-    ((float("nan"), 1.0), "^probs: must be finite"),  # before: NaN
-])
+@pytest.mark.parametrize(
+    "probs, match",
+    [
+        ((1.5, -0.5), "^probs: probabilities must be non-negative"),  # before: NaN
+        ((1.0, 1.0), "^probs: probabilities must sum to 1"),  # before: silently renormalised
+        ((0.6, 0.3), "^probs: probabilities must sum to 1"),
+        ((float("nan"), 1.0), "^probs: must be finite"),  # before: NaN
+    ],
+)
 def test_imm_init_probabilities_are_checked(probs, match):
     with pytest.raises(ValueError, match=match):
         _imm_state(probs)
@@ -193,6 +197,7 @@ def test_bank_prior_is_checked():
 
 # 4./5. particle filter ------------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("n", [2.5, 0, -3, True, np.float64(np.nan), "64"])
 def test_n_particles_must_be_a_positive_integer(n):
     # before: 2.5 ran with 2 particles and True with 1, without a word
@@ -223,13 +228,16 @@ def test_zero_measurement_noise_is_rejected_by_the_particle_filter_but_not_by_th
 SIGNAL = np.random.default_rng(0).standard_normal(256)
 
 
-@pytest.mark.parametrize("y, m, match", [
-    (np.where(np.arange(256) == 3, np.nan, SIGNAL), (1, 2), "^y: must be finite"),  # before: NaN
-    (SIGNAL + 1j * SIGNAL, (1, 2), "^y: must be real-valued"),  # before: complex "variances"
-    (SIGNAL, (1.5, 2), "^m: must be a positive integer, got 1.5"),  # before: truncated to 1
-    (SIGNAL, (True, 2), "^m: must be a positive integer, got True"),  # before: taken as 1
-    (SIGNAL, (0, 2), "^m: must be a positive integer, got 0"),
-])
+@pytest.mark.parametrize(
+    "y, m, match",
+    [
+        (np.where(np.arange(256) == 3, np.nan, SIGNAL), (1, 2), "^y: must be finite"),  # before: NaN
+        (SIGNAL + 1j * SIGNAL, (1, 2), "^y: must be real-valued"),  # before: complex "variances"
+        (SIGNAL, (1.5, 2), "^m: must be a positive integer, got 1.5"),  # before: truncated to 1
+        (SIGNAL, (True, 2), "^m: must be a positive integer, got True"),  # before: taken as 1
+        (SIGNAL, (0, 2), "^m: must be a positive integer, got 0"),
+    ],
+)
 def test_allan_bad_inputs(y, m, match):
     with pytest.raises(ValueError, match=match):
         allan_variance(y, 0.1, m)
@@ -256,6 +264,7 @@ def test_allan_float32_with_offset_matches_float64():
 # 7. one float dtype at every entry point ------------------------------------------------------------
 # kinds: "f64" the reference; "int" integer m0 = 0, P0 = I; "f32" a float32 model (m0 = 0, P0 = I) run
 # on the float64 measurements Y
+
 
 def _cast(arrays, kind):
     """``arrays`` as float32 for kind "f32", else float64; ``(m0, P0) = (0, I)`` appended, integer
@@ -305,8 +314,9 @@ ENTRY = {
 
 def _run(entry, kind):
     run, family = ENTRY[entry]
-    return {"linear": lambda: run(_lin(kind)), "nonlinear": lambda: run(_nl(kind)),
-            "imm": lambda: _imm_run(kind)}[family]()
+    return {"linear": lambda: run(_lin(kind)), "nonlinear": lambda: run(_nl(kind)), "imm": lambda: _imm_run(kind)}[
+        family
+    ]()
 
 
 @pytest.mark.parametrize("kind", ["int", "f32"])

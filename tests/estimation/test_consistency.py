@@ -80,7 +80,9 @@ def test_false_alarm_rate_of_gate_matches_its_probability():
 
     @jax.jit
     def rate(keys):
-        return jax.vmap(lambda k: 1.0 - jnp.mean(kalman_filter(model, sample(model, k, 50)[1], gate=thr).accepted))(keys)
+        return jax.vmap(lambda k: 1.0 - jnp.mean(kalman_filter(model, sample(model, k, 50)[1], gate=thr).accepted))(
+            keys
+        )
 
     r = float(jnp.mean(rate(jax.random.split(jax.random.PRNGKey(5), 400))))
     # 20,000 decisions: binomial sd of the rate ≈ 0.0015 around 0.05 (rejections slightly perturb later steps)

@@ -75,6 +75,7 @@ def _linear_loss(model: LinearGaussianSSM, y: np.ndarray, run: Callable) -> Call
     def loss(th):
         m = LinearGaussianSSM(th["F"], th["Q"], model.H, th["R"], model.m0, model.P0)
         return run(m, y, missing="nan").log_likelihood
+
     return loss
 
 
@@ -104,8 +105,11 @@ def _nl_h(params, x):
 
 def _nonlinear_problem():
     rng = np.random.default_rng(32)
-    theta = {"F": np.array([[0.9, 0.2], [-0.1, 0.7]]), "Q": np.array([[0.05, 0.01], [0.01, 0.08]]),
-             "R": np.array([[0.1]])}
+    theta = {
+        "F": np.array([[0.9, 0.2], [-0.1, 0.7]]),
+        "Q": np.array([[0.05, 0.01], [0.01, 0.08]]),
+        "R": np.array([[0.1]]),
+    }
     x, ys = np.array([0.5, -0.3]), []
     for _ in range(T):
         ys.append(np.asarray(_nl_h(None, x)) + rng.normal(0, np.sqrt(0.1), 1))
@@ -114,14 +118,17 @@ def _nonlinear_problem():
 
     def model(th):
         return NonlinearSSM({"F": th["F"]}, th["Q"], th["R"], m0, p0, _nl_f, _nl_h)
+
     return model, np.array(ys), theta
 
 
 @pytest.mark.parametrize("which", ["ekf", "ukf"])
 def test_nonlinear_filter_log_likelihood_gradient_matches_finite_differences(which):
     model, y, theta = _nonlinear_problem()
-    run = {"ekf": lambda m: extended_kalman_filter(m, y),
-           "ukf": lambda m: unscented_kalman_filter(m, y, alpha=0.8, beta=2.0, kappa=1.0)}[which]
+    run = {
+        "ekf": lambda m: extended_kalman_filter(m, y),
+        "ukf": lambda m: unscented_kalman_filter(m, y, alpha=0.8, beta=2.0, kappa=1.0),
+    }[which]
     _check_against_finite_differences(lambda th: run(model(th)).log_likelihood, theta)
 
 

@@ -34,7 +34,9 @@ def test_exact_for_linear_plant_driven_by_ramp_and_sine():
     y = part + np.exp(-z * w * t) * (0.7 * np.cos(wd * t) - 0.2 * np.sin(wd * t))
     pred = np.asarray(hp.predict_series(jnp.asarray(y[:, None])))
     assert np.max(np.abs(pred[20:, 0] - y[20:])) <= 1e-8
-    assert hp.numerical_rank(y[:, None]) <= 6  # 1 and t (2) + sine (2) + plant (2); small σ may fall under the tolerance
+    assert (
+        hp.numerical_rank(y[:, None]) <= 6
+    )  # 1 and t (2) + sine (2) + plant (2); small σ may fall under the tolerance
 
 
 def test_noise_raises_the_error_to_the_noise_level():

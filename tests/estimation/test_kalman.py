@@ -46,8 +46,9 @@ def test_log_likelihood_matches_dynamax():
     u = rng.standard_normal((40, 1))
     _, y = simulate_np(model, rng, 40, u)
     ours = kalman_filter(model, y, u)
-    params = dyn.make_lgssm_params(model.m0, model.P0, model.F, model.Q, model.H, model.R,
-                                   dynamics_input_weights=model.B)
+    params = dyn.make_lgssm_params(
+        model.m0, model.P0, model.F, model.Q, model.H, model.R, dynamics_input_weights=model.B
+    )
     # dynamax's input u[t+1] drives the transition into t+1; ours u[t] drives t → t+1.
     u_dyn = jnp.concatenate([jnp.zeros((1, 1)), jnp.asarray(u[:-1])])
     ref = dyn.lgssm_filter(params, jnp.asarray(y), u_dyn)
@@ -132,8 +133,9 @@ def test_vmap_equals_loop():
         np.testing.assert_allclose(batched.log_likelihood[i], one.log_likelihood, rtol=1e-12)
     # vmap over model parameters too (a bank of R values)
     rs = jnp.stack([model.R * s for s in (0.5, 1.0, 2.0)])
-    lls = jax.vmap(lambda r: kalman_filter(model.__class__(model.F, model.Q, model.H, r, model.m0, model.P0),
-                                           ys[0]).log_likelihood)(rs)
+    lls = jax.vmap(
+        lambda r: kalman_filter(model.__class__(model.F, model.Q, model.H, r, model.m0, model.P0), ys[0]).log_likelihood
+    )(rs)
     for s, ll in zip((0.5, 1.0, 2.0), lls):
         m = lgssm(model.F, model.Q, model.H, model.R * s, model.m0, model.P0)
         np.testing.assert_allclose(ll, kalman_filter(m, ys[0]).log_likelihood, rtol=1e-12)
@@ -156,8 +158,9 @@ def test_log_likelihood_gradient_matches_finite_differences():
 def test_joseph_update_stays_symmetric_psd_when_ill_conditioned():
     """Poorly conditioned update: Joseph stays symmetric PSD."""
     P = jnp.diag(jnp.array([1e6, 1e-6]))
-    state, _ = kalman.update(GaussianState(jnp.zeros(2), P), jnp.array([1.0]), jnp.array([[1.0, 1.0]]),
-                             jnp.array([[1e-9]]))
+    state, _ = kalman.update(
+        GaussianState(jnp.zeros(2), P), jnp.array([1.0]), jnp.array([[1.0, 1.0]]), jnp.array([[1e-9]])
+    )
     np.testing.assert_allclose(state.cov, state.cov.T, rtol=0, atol=0)
     assert np.min(np.linalg.eigvalsh(np.asarray(state.cov))) > -1e-12
 

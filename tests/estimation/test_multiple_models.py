@@ -42,8 +42,7 @@ def _manoeuvring_track(t=40, seed=0):
 
 
 def _members():
-    return (linear_member(F_CV, G @ G.T * 0.01, H_POS, np.eye(2)),
-            linear_member(F_CV, G @ G.T * 1.0, H_POS, np.eye(2)))
+    return (linear_member(F_CV, G @ G.T * 0.01, H_POS, np.eye(2)), linear_member(F_CV, G @ G.T * 1.0, H_POS, np.eye(2)))
 
 
 def _init():
@@ -93,8 +92,14 @@ def test_imm_with_nonlinear_members_on_linear_models_equals_linear_imm(kind):
     ref = imm_filter(imm(_members(), PI), _init(), y)
     mems = []
     for q in (0.01, 1.0):
-        nl = nonlinear_ssm(lambda p, x, u: jnp.asarray(F_CV) @ x, lambda p, x: jnp.asarray(H_POS) @ x,
-                           G @ G.T * q, np.eye(2), np.zeros(4), np.eye(4))
+        nl = nonlinear_ssm(
+            lambda p, x, u: jnp.asarray(F_CV) @ x,
+            lambda p, x: jnp.asarray(H_POS) @ x,
+            G @ G.T * q,
+            np.eye(2),
+            np.zeros(4),
+            np.eye(4),
+        )
         mems.append(ekf_member(nl) if kind == "ekf" else ukf_member(nl, alpha=0.9))
     got = imm_filter(imm(mems, PI), _init(), y)
     np.testing.assert_allclose(got.mode_probs, ref.mode_probs, rtol=1e-9, atol=1e-12)
@@ -102,8 +107,11 @@ def test_imm_with_nonlinear_members_on_linear_models_equals_linear_imm(kind):
 
 
 def test_imm_rejects_bad_transition_matrix():
-    with pytest.raises(ValueError, match=r"^transition: probabilities must sum to 1 along the last axis, "
-                                         r"got sums \[1.1, 1.0\]"):
+    with pytest.raises(
+        ValueError,
+        match=r"^transition: probabilities must sum to 1 along the last axis, "
+        r"got sums \[1.1, 1.0\]",
+    ):
         imm(_members(), np.array([[0.9, 0.2], [0.1, 0.9]]))
     with pytest.raises(ValueError, match="^transition: expected shape"):
         imm(_members(), np.eye(3))
@@ -114,8 +122,12 @@ def test_static_bank_identifies_the_true_noise_level_and_equals_separate_filters
     truth = lgssm(F_CV, G @ G.T * 0.1, H_POS, np.eye(2), np.zeros(4), np.eye(4))
     _, y = sample(truth, jax.random.PRNGKey(7), 150)
     models = LinearGaussianSSM(
-        F=jnp.stack([F_CV] * 3), Q=jnp.stack([G @ G.T * 0.1] * 3), H=jnp.stack([H_POS] * 3),
-        R=jnp.stack([np.eye(2) * s for s in scales]), m0=jnp.zeros((3, 4)), P0=jnp.stack([np.eye(4)] * 3),
+        F=jnp.stack([F_CV] * 3),
+        Q=jnp.stack([G @ G.T * 0.1] * 3),
+        H=jnp.stack([H_POS] * 3),
+        R=jnp.stack([np.eye(2) * s for s in scales]),
+        m0=jnp.zeros((3, 4)),
+        P0=jnp.stack([np.eye(4)] * 3),
     )
     bank = bank_filter(models, y)
     assert float(jnp.exp(bank.log_probs[-1, 1])) > 0.99
@@ -151,9 +163,9 @@ def test_sprt_thresholds_and_wald_average_sample_numbers():
     type1 = float(jnp.mean(r0.decision == 1))
     type2 = float(jnp.mean(r1.decision == -1))
     assert type1 <= alpha / (1 - beta) + 0.005 and type2 <= beta / (1 - alpha) + 0.005
-    n0, n1 = wald_asn(alpha, beta, -delta**2 / 2, delta**2 / 2)
+    n0, n1 = wald_asn(alpha, beta, -(delta**2) / 2, delta**2 / 2)
     # Wald's ASN neglects the overshoot over the thresholds, so the true ASN is a little larger
     for mc, approx in ((r0.n_samples.mean(), n0), (r1.n_samples.mean(), n1)):
         assert 1.0 <= float(mc) / float(approx) <= 1.3, (mc, approx)
-    size = sprt_bank_size(alpha, beta, -delta**2 / 2, delta**2 / 2)
+    size = sprt_bank_size(alpha, beta, -(delta**2) / 2, delta**2 / 2)
     np.testing.assert_allclose(size, max((upper - lower) / (delta**2 / 2), float(n0)), rtol=1e-12)

@@ -23,8 +23,7 @@ DT = 0.1
 
 def pendulum_f(params, x, u):
     """Damped pendulum with a slowly decaying bias torque (x = [angle, rate, bias])."""
-    return jnp.stack([x[0] + DT * x[1], x[1] - DT * (params["g"] * jnp.sin(x[0]) + 0.2 * x[1] - x[2]),
-                      0.98 * x[2]])
+    return jnp.stack([x[0] + DT * x[1], x[1] - DT * (params["g"] * jnp.sin(x[0]) + 0.2 * x[1] - x[2]), 0.98 * x[2]])
 
 
 def pendulum_h(params, x):
@@ -32,8 +31,15 @@ def pendulum_h(params, x):
 
 
 def pendulum_model():
-    return nonlinear_ssm(pendulum_f, pendulum_h, Q=np.diag([1e-4, 4e-3, 1e-4]), R=np.diag([0.01, 0.02]),
-                         m0=np.array([0.8, 0.0, 0.1]), P0=np.diag([0.05, 0.05, 0.02]), params={"g": 9.81})
+    return nonlinear_ssm(
+        pendulum_f,
+        pendulum_h,
+        Q=np.diag([1e-4, 4e-3, 1e-4]),
+        R=np.diag([0.01, 0.02]),
+        m0=np.array([0.8, 0.0, 0.1]),
+        P0=np.diag([0.05, 0.05, 0.02]),
+        params={"g": 9.81},
+    )
 
 
 def pendulum_data(t=25, seed=0):
@@ -49,8 +55,14 @@ def pendulum_data(t=25, seed=0):
 
 def as_nonlinear(model):
     F, H = model.F, model.H
-    return nonlinear_ssm(lambda p, x, u: F @ x + (0.0 if u is None else model.B @ u), lambda p, x: H @ x,
-                         model.Q, model.R, model.m0, model.P0)
+    return nonlinear_ssm(
+        lambda p, x, u: F @ x + (0.0 if u is None else model.B @ u),
+        lambda p, x: H @ x,
+        model.Q,
+        model.R,
+        model.m0,
+        model.P0,
+    )
 
 
 @pytest.mark.parametrize("which", ["ekf", "ukf", "ckf"])
@@ -61,9 +73,11 @@ def test_nonlinear_filters_equal_kf_on_linear_model(which):
     _, y = simulate_np(model, rng, 20, u)
     ref = kalman_filter(model, y, u)
     nl = as_nonlinear(model)
-    run = {"ekf": lambda: extended_kalman_filter(nl, y, u),
-           "ukf": lambda: unscented_kalman_filter(nl, y, u, alpha=0.7, beta=2.0, kappa=1.0),
-           "ckf": lambda: cubature_kalman_filter(nl, y, u)}[which]
+    run = {
+        "ekf": lambda: extended_kalman_filter(nl, y, u),
+        "ukf": lambda: unscented_kalman_filter(nl, y, u, alpha=0.7, beta=2.0, kappa=1.0),
+        "ckf": lambda: cubature_kalman_filter(nl, y, u),
+    }[which]
     got = run()
     tol = 0.0 if which == "ekf" else 1e-9
     np.testing.assert_allclose(got.means, ref.means, rtol=tol, atol=tol)
@@ -186,20 +200,33 @@ def _rb_h(params, x):
 def _range_bearing_case() -> EKFCase:
     def jac_f(x):
         c, s = np.cos(x[3]), np.sin(x[3])
-        return np.array([[1.0, 0.0, DT * c, -DT * x[2] * s], [0.0, 1.0, DT * s, DT * x[2] * c],
-                         [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+        return np.array(
+            [
+                [1.0, 0.0, DT * c, -DT * x[2] * s],
+                [0.0, 1.0, DT * s, DT * x[2] * c],
+                [0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0],
+            ]
+        )
 
     def jac_h(x):
         r2 = x[0] ** 2 + x[1] ** 2
         r = np.sqrt(r2)
         return np.array([[x[0] / r, x[1] / r, 0.0, 0.0], [-x[1] / r2, x[0] / r2, 0.0, 0.0]])
 
-    model = nonlinear_ssm(_rb_f, _rb_h, Q=np.diag([1e-3, 1e-3, 1e-2, 4e-3]), R=np.diag([0.04, 1e-3]),
-                          m0=np.array([10.0, 2.0, 1.0, 0.4]), P0=np.diag([0.5, 0.5, 0.1, 0.05]))
+    model = nonlinear_ssm(
+        _rb_f,
+        _rb_h,
+        Q=np.diag([1e-3, 1e-3, 1e-2, 4e-3]),
+        R=np.diag([0.04, 1e-3]),
+        m0=np.array([10.0, 2.0, 1.0, 0.4]),
+        P0=np.diag([0.5, 0.5, 0.1, 0.05]),
+    )
     return EKFCase(
         model,
-        f=lambda x: np.array([x[0] + DT * x[2] * np.cos(x[3]), x[1] + DT * x[2] * np.sin(x[3]), x[2],
-                              x[3] + DT * TURN]),
+        f=lambda x: np.array(
+            [x[0] + DT * x[2] * np.cos(x[3]), x[1] + DT * x[2] * np.sin(x[3]), x[2], x[3] + DT * TURN]
+        ),
         jac_f=jac_f,
         h=lambda x: np.array([np.hypot(x[0], x[1]), np.arctan2(x[1], x[0])]),
         jac_h=jac_h,
@@ -242,8 +269,12 @@ def filterpy_ekf(case: EKFCase, y: np.ndarray, mask: np.ndarray) -> dict[str, np
         idx = np.flatnonzero(mask[k])
         ll = 0.0
         if idx.size:
-            ekf.update(y[k, idx].reshape(-1, 1), lambda x, i=idx: case.jac_h(x.ravel())[i],
-                       lambda x, i=idx: case.h(x.ravel())[i].reshape(-1, 1), R=R[np.ix_(idx, idx)])
+            ekf.update(
+                y[k, idx].reshape(-1, 1),
+                lambda x, i=idx: case.jac_h(x.ravel())[i],
+                lambda x, i=idx: case.h(x.ravel())[i].reshape(-1, 1),
+                R=R[np.ix_(idx, idx)],
+            )
             ll = ekf.log_likelihood
         out["means"].append(ekf.x.ravel().copy())
         out["covs"].append(ekf.P.copy())

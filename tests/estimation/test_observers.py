@@ -35,11 +35,14 @@ def test_ackermann_equals_scipy_single_input(poles):
     np.testing.assert_allclose(_sorted(np.linalg.eigvals(a - b @ k)), _sorted(poles), atol=1e-9)
 
 
-@pytest.mark.parametrize("n,m,poles", [
-    (4, 2, [-1.0, -2.0, -3.0, -4.0]),
-    (5, 2, [-1 + 2j, -1 - 2j, -2.0, -3.0, -0.5]),
-    (6, 3, [-1 + 1j, -1 - 1j, -2 + 0.5j, -2 - 0.5j, -3.0, -4.0]),
-])
+@pytest.mark.parametrize(
+    "n,m,poles",
+    [
+        (4, 2, [-1.0, -2.0, -3.0, -4.0]),
+        (5, 2, [-1 + 2j, -1 - 2j, -2.0, -3.0, -0.5]),
+        (6, 3, [-1 + 1j, -1 - 1j, -2 + 0.5j, -2 - 0.5j, -3.0, -4.0]),
+    ],
+)
 def test_multi_input_placement_places_the_poles_like_scipy(n, m, poles):
     rng = np.random.default_rng(41 + n)
     a, b = rng.standard_normal((n, n)), rng.standard_normal((n, m))

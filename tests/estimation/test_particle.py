@@ -16,8 +16,14 @@ from jaxsim.estimation.particle import (
     systematic_resample,
 )
 
-MODEL = lgssm(F=[[1.0, 0.1], [0.0, 0.95]], Q=np.diag([0.01, 0.05]), H=[[1.0, 0.0]], R=[[0.2]],
-              m0=[0.0, 0.5], P0=np.diag([1.0, 0.5]))
+MODEL = lgssm(
+    F=[[1.0, 0.1], [0.0, 0.95]],
+    Q=np.diag([0.01, 0.05]),
+    H=[[1.0, 0.0]],
+    R=[[0.2]],
+    m0=[0.0, 0.5],
+    P0=np.diag([1.0, 0.5]),
+)
 
 
 def _counts(idx, n):
@@ -72,8 +78,7 @@ def test_no_resampling_mode_degenerates_and_resampling_keeps_particles_alive():
     without = bootstrap_filter(pm, jax.random.PRNGKey(7), y, n_particles=500, resampling=None)
     assert not bool(jnp.any(without.resampled)) and bool(jnp.any(with_rs.resampled))
     assert float(without.ess[-1]) < 0.1 * float(jnp.min(with_rs.ess[-10:]))
-    always = bootstrap_filter(pm, jax.random.PRNGKey(7), y, n_particles=500, resampling="stratified",
-                              ess_threshold=1.0)
+    always = bootstrap_filter(pm, jax.random.PRNGKey(7), y, n_particles=500, resampling="stratified", ess_threshold=1.0)
     assert bool(jnp.all(always.resampled[1:]))
 
 

@@ -21,9 +21,17 @@ def _first_output(params, y):
 def double_integrator(Q=-1.0):
     """ẋ1 = x2, ẋ2 = d, y = x1; canonical z = (x1, x2 + Q x1) (F1 = −Q, F2 = 1, F3 = −Q², F4 = Q)."""
     Q = float(Q)
-    return smo.ReducedModel(F1=jnp.asarray(-Q), F2=jnp.ones(1), F3=jnp.array([-Q * Q]),
-                            F4=jnp.array([[Q]]), D1=jnp.asarray(0.0), D2=jnp.ones(1), params=None,
-                            known=_no_terms, reduced_output=_first_output)
+    return smo.ReducedModel(
+        F1=jnp.asarray(-Q),
+        F2=jnp.ones(1),
+        F3=jnp.array([-Q * Q]),
+        F4=jnp.array([[Q]]),
+        D1=jnp.asarray(0.0),
+        D2=jnp.ones(1),
+        params=None,
+        known=_no_terms,
+        reduced_output=_first_output,
+    )
 
 
 def samples(dt, T=5.0, omega=2.0):
@@ -48,7 +56,9 @@ def test_lyapunov_matrix_matches_scipy():
     W = np.diag([1.0, 2.0, 3.0])
     P = smo.lyapunov_P(jnp.asarray(F4), jnp.asarray(W))
     np.testing.assert_allclose(P, scipy.linalg.solve_continuous_lyapunov(F4.T, -W), rtol=1e-10, atol=1e-12)
-    assert float(smo.lyapunov_P(jnp.array([[-1.0]]), jnp.array([[2.0]]))[0, 0]) == pytest.approx(1.0)  # paper: P = 1, W = 2
+    assert float(smo.lyapunov_P(jnp.array([[-1.0]]), jnp.array([[2.0]]))[0, 0]) == pytest.approx(
+        1.0
+    )  # paper: P = 1, W = 2
 
 
 @pytest.mark.parametrize("scheme", ["implicit_sign", "smooth"])
@@ -119,8 +129,14 @@ def test_vmap_over_gains_equals_loop_and_grad_matches_finite_differences():
     model = double_integrator()
 
     def loss(log_k1):
-        par = smo.SMOParams(model=model, gains=smo.SMOGains(k1=jnp.exp(log_k1), k2=1.0, k3=100.0),
-                            P=jnp.eye(1), width=jnp.asarray(1e-3), filter_tau=jnp.asarray(0.0), scheme="smooth")
+        par = smo.SMOParams(
+            model=model,
+            gains=smo.SMOGains(k1=jnp.exp(log_k1), k2=1.0, k3=100.0),
+            P=jnp.eye(1),
+            width=jnp.asarray(1e-3),
+            filter_tau=jnp.asarray(0.0),
+            scheme="smooth",
+        )
         run = smo.smo_filter(par, t, ys, us)
         return jnp.mean((run.d_hat[200:] - d[200:]) ** 2)
 

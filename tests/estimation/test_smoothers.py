@@ -105,8 +105,13 @@ def test_parallel_equals_serial(time_varying):
     mask = rng.random((t, 2)) > 0.25
     ser, par = kalman_filter(model, y, u, mask=mask), parallel_kalman_filter(model, y, u, mask=mask)
     for field in ser._fields:
-        np.testing.assert_allclose(np.asarray(getattr(par, field), float), np.asarray(getattr(ser, field), float),
-                                   rtol=1e-9, atol=1e-10, err_msg=field)
+        np.testing.assert_allclose(
+            np.asarray(getattr(par, field), float),
+            np.asarray(getattr(ser, field), float),
+            rtol=1e-9,
+            atol=1e-10,
+            err_msg=field,
+        )
     ss, ps = rts_smoother(model, y, u, mask=mask), parallel_rts_smoother(model, y, u, mask=mask)
     np.testing.assert_allclose(ps.means, ss.means, rtol=1e-9, atol=1e-10)
     np.testing.assert_allclose(ps.covs, ss.covs, rtol=1e-9, atol=1e-10)

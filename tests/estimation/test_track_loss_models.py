@@ -79,8 +79,9 @@ def test_coordinated_turn_step_follows_the_vessel_arc_and_reduces_to_cv():
     np.testing.assert_allclose(x1[:2], s1.position, atol=1e-9)
     np.testing.assert_allclose(x1[2:4], s1.velocity, atol=1e-12)
     x_straight = jnp.array([1.0, 2.0, 10.0, -4.0, 0.0])
-    np.testing.assert_allclose(ct_transition(3.0, x_straight)[:4], cv_transition(3.0) @ np.asarray(x_straight[:4]),
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        ct_transition(3.0, x_straight)[:4], cv_transition(3.0) @ np.asarray(x_straight[:4]), atol=1e-12
+    )
     jac = jax.jacfwd(lambda x: ct_transition(3.0, x))(x_straight)
     assert np.all(np.isfinite(jac))  # smooth at ω = 0
 

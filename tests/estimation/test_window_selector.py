@@ -9,6 +9,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from jaxsim.control.fuzzy import evaluate
+from jaxsim.estimation.alpha_beta import window_bank
 from jaxsim.estimation.window_selector import (
     WindowBank,
     fixed_window,
@@ -20,8 +22,6 @@ from jaxsim.estimation.window_selector import (
     window_bank_filter,
     window_selector,
 )
-from jaxsim.control.fuzzy import evaluate
-from jaxsim.estimation.alpha_beta import window_bank
 
 DT = 3.0
 J = 10
@@ -42,13 +42,13 @@ def test_bank_is_the_least_squares_line_over_the_last_j_plots():
         for j in range(2, J + 1):
             k = min(j, t + 1)  # a young track's window holds every plot so far
             tt = (np.arange(k) - (k - 1)) * DT
-            slope, icpt = np.polyfit(tt, z[t - k + 1:t + 1], 1)
+            slope, icpt = np.polyfit(tt, z[t - k + 1 : t + 1], 1)
             np.testing.assert_allclose(bank.positions[t, j - 2], icpt, rtol=0, atol=1e-9)
             np.testing.assert_allclose(bank.velocities[t, j - 2], slope, rtol=0, atol=1e-9)
             np.testing.assert_allclose(bank.predictions[t, j - 2], icpt + slope * DT, rtol=0, atol=1e-9)
     # on full windows it is alpha_beta.window_bank (the FIR form of the same fits)
     for t in range(J - 1, z.shape[0]):
-        ref = np.asarray(window_bank(z[t - J + 1:t + 1], DT))  # (J − 1, 2, d)
+        ref = np.asarray(window_bank(z[t - J + 1 : t + 1], DT))  # (J − 1, 2, d)
         np.testing.assert_allclose(bank.positions[t], ref[:, 0], atol=1e-9)
         np.testing.assert_allclose(bank.velocities[t], ref[:, 1], atol=1e-9)
     # residual norm of window j at scan t: ‖z_t − prediction made at t − 1‖, from the third plot on
@@ -73,7 +73,7 @@ def _sugeno_by_hand(L, a=5.0, c=1.5):
     bad = 1.0 - good
     num = den = 0.0
     for p in range(J, 1, -1):  # Q⁽²…ᵖ⁾ good, Q⁽ᵖ⁺¹…ᴶ⁾ bad ⇒ m = p
-        w = np.prod(good[: p - 1]) * np.prod(bad[p - 1:])
+        w = np.prod(good[: p - 1]) * np.prod(bad[p - 1 :])
         num, den = num + w * p, den + w
     w = np.prod(bad)  # all bad ⇒ 2
     return (num + 2 * w) / (den + w)

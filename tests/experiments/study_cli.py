@@ -15,8 +15,13 @@ def run_quick_study(name: str, out: Path, *extra: str, timeout: float = 900) -> 
     """``python -m experiments run NAME --quick [EXTRA...] --out OUT``; asserts success, returns results.json.
 
     ``extra``: further arguments, e.g. ``"--set", "budget=64"``."""
-    proc = subprocess.run([sys.executable, "-m", "experiments", "run", name, "--quick", *extra, "--out", str(out)],
-                          capture_output=True, text=True, cwd=ROOT, timeout=timeout,
-                          env={**os.environ, "JAX_COMPILATION_CACHE_DIR": str(CACHE_DIR)})
+    proc = subprocess.run(
+        [sys.executable, "-m", "experiments", "run", name, "--quick", *extra, "--out", str(out)],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=timeout,
+        env={**os.environ, "JAX_COMPILATION_CACHE_DIR": str(CACHE_DIR)},
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     return json.loads((Path(out) / "results.json").read_text())

@@ -15,8 +15,10 @@ def paper_runs():
     plant = afp.true_plant(cfg)
     key = jax.random.PRNGKey(0)
     metrics_of = jax.jit(lambda loop: afp.run_metrics(cfg, loop, key))
-    return cfg, {mode: {k: float(v) for k, v in metrics_of(afp.build_loop(cfg, plant, mode=mode)).items()}
-                 for mode in ("kalman", "hold")}
+    return cfg, {
+        mode: {k: float(v) for k, v in metrics_of(afp.build_loop(cfg, plant, mode=mode)).items()}
+        for mode in ("kalman", "hold")
+    }
 
 
 def test_paper_reproduction(paper_runs):
@@ -57,6 +59,7 @@ def test_tuning_gradient_matches_finite_differences():
     loss = jax.jit(lambda th: afp.tuning_loss(cfg, th, sample, key))
     grad = jax.jit(jax.grad(lambda th: afp.tuning_loss(cfg, th, sample, key)))(theta)
     for name, idx, eps in (("lam", 0, 1e-5), ("k_s", 1, 1e-3), ("log10_accel_psd", None, 1e-4)):
+
         def shifted(d):
             v = theta[name]
             v = v + d if idx is None else v.at[idx].add(d)
@@ -69,8 +72,16 @@ def test_tuning_gradient_matches_finite_differences():
     assert jnp.isfinite(loss(theta))
 
 
-SHORT = {"t_final": 12.0, "ss_window": [8.0, 12.0], "t32_window": [10.0, 12.0], "mc_runs": 2, "tune_steps": 2,
-         "tune_t_final": 7.0, "tune_loss_start": 4.0, "tune_dt": 0.004}
+SHORT = {
+    "t_final": 12.0,
+    "ss_window": [8.0, 12.0],
+    "t32_window": [10.0, 12.0],
+    "mc_runs": 2,
+    "tune_steps": 2,
+    "tune_t_final": 7.0,
+    "tune_loss_start": 4.0,
+    "tune_dt": 0.004,
+}
 
 
 @pytest.mark.slow  # a 12 s study run through the CLI: a few compilations

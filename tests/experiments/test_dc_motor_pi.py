@@ -16,7 +16,8 @@ from tests.experiments.study_cli import run_quick_study
 
 def oracle_loss(cfg: Config, kp: float, ki: float) -> float:
     """``ITAE + ρ·energy`` of the PI loop on the exact ZOH discretisation of ``K/(s(Ts+1))`` with the
-    prefiltered unit step ``1 − exp(−t/τ)`` as reference, the controller written out (``u = kp·e + z``, ``z += ts·ki·e``), each period split in 20 exact
+    prefiltered unit step ``1 − exp(−t/τ)`` as reference, the controller written out (``u = kp·e + z``, ``z +=
+    ts·ki·e``), each period split in 20 exact
     sub-steps so the load jump at ``t_load`` enters where it happens."""
     a = np.array([[0.0, 1.0], [0.0, -1.0 / cfg.T]])
     b = np.array([[0.0], [cfg.K / cfg.T]])
@@ -74,8 +75,9 @@ def test_tuned_loss_against_an_exact_zoh_simulation_and_nelder_mead(study_output
     def f(z):
         return float(loss({"kp": jnp.exp(z[0]), "ki": jnp.exp(z[1])}))
 
-    nm = scipy.optimize.minimize(f, np.log([1.0, 0.5]), method="Nelder-Mead",
-                                 options=dict(xatol=1e-8, fatol=1e-12, maxiter=2000))
+    nm = scipy.optimize.minimize(
+        f, np.log([1.0, 0.5]), method="Nelder-Mead", options=dict(xatol=1e-8, fatol=1e-12, maxiter=2000)
+    )
     assert nm.success
     assert grad["best_loss"] == pytest.approx(nm.fun, rel=1e-2)
     assert res["metrics"]["loss_pso"] == pytest.approx(nm.fun, rel=1e-2)

@@ -7,10 +7,14 @@ import pytest
 from tests.experiments.study_cli import run_quick_study
 
 PAPER = {  # the paper's values, spec §1.4 (linear astatic f = 0.7 is f/K_mds, the paper's line is lost)
-    "ess_static_f0_fuzzy": 0.5556, "ess_static_f0_linear": 0.5556,
-    "ess_static_f03_fuzzy": 0.8108, "ess_static_f03_linear": 0.8889,
-    "ess_astatic_f02_fuzzy": 0.16, "ess_astatic_f02_linear": 0.16,
-    "ess_astatic_f07_fuzzy": 0.4571, "ess_astatic_f07_linear": 0.56,
+    "ess_static_f0_fuzzy": 0.5556,
+    "ess_static_f0_linear": 0.5556,
+    "ess_static_f03_fuzzy": 0.8108,
+    "ess_static_f03_linear": 0.8889,
+    "ess_astatic_f02_fuzzy": 0.16,
+    "ess_astatic_f02_linear": 0.16,
+    "ess_astatic_f07_fuzzy": 0.4571,
+    "ess_astatic_f07_linear": 0.56,
 }
 
 
@@ -77,8 +81,14 @@ def test_grid_analytic_equals_simulated_and_missing_steady_states_are_detected(r
 
 def test_figures_tables_and_assumptions(results):
     out, res = results
-    for name in ("fig2_static_characteristic", "fig3_fc1_fc2_kmds", "fig4_static_transients",
-                 "fig5_astatic_transients", "fig6_pi_astatic", "steady_state_grid"):
+    for name in (
+        "fig2_static_characteristic",
+        "fig3_fc1_fc2_kmds",
+        "fig4_static_transients",
+        "fig5_astatic_transients",
+        "fig6_pi_astatic",
+        "steady_state_grid",
+    ):
         assert (out / f"{name}.png").stat().st_size > 10_000, name
     assert (out / "paper_cases.csv").exists() and (out / "steady_state_grid.csv").exists()
     for key in ("fc1_static", "fuzzy_pi", "fig6_scenario", "fig2_mamdani", "disturbance_sign"):

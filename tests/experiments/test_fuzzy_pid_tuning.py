@@ -6,8 +6,7 @@ import pytest
 
 from tests.experiments.study_cli import run_quick_study
 
-TINY = ("budget=16", "pso_particles=4", "grid_points_per_dim=2", "n_starts=2", "fis_steps=2", "t_final=2.0",
-        "dt=0.01")
+TINY = ("budget=16", "pso_particles=4", "grid_points_per_dim=2", "n_starts=2", "fis_steps=2", "t_final=2.0", "dt=0.01")
 
 
 @pytest.fixture(scope="module")
@@ -36,8 +35,9 @@ def test_claims_and_closed_forms(results):
     _, res = results
     m = res["metrics"]
     verdicts = {r["metric"]: r["verdict"] for r in res["reproduction"]}
-    assert verdicts == dict.fromkeys(("k_mds", "settling_max_linear", "feasible_paper",
-                                      "initial_loss_sugeno_vs_paper_rel_diff"), "reproduced")
+    assert verdicts == dict.fromkeys(
+        ("k_mds", "settling_max_linear", "feasible_paper", "initial_loss_sugeno_vs_paper_rel_diff"), "reproduced"
+    )
     rows = {r["method"]: r for r in res["tables"]["three_section"]}
     # the linear loop's simulated steady-state error is the closed-form one (the constraint's reference)
     assert rows["linear K_mds"]["e_ss_over_linear_max"] == pytest.approx(1.0, abs=1e-4)

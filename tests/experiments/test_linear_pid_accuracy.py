@@ -60,8 +60,13 @@ def test_every_finite_cell_matches_and_every_infinite_cell_diverges(study_output
 
 
 def test_cli_list_help_and_bad_override():
-    run = lambda *a: subprocess.run([sys.executable, "-m", "experiments", *a],  # noqa: E731
-                                    capture_output=True, text=True, cwd=ROOT, timeout=300)
+    run = lambda *a: subprocess.run(  # noqa: E731
+        [sys.executable, "-m", "experiments", *a],  # noqa: E731
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=300,
+    )
     listed = run("list")
     assert listed.returncode == 0 and "linear_pid_accuracy" in listed.stdout
     assert run("--help").returncode == 0

@@ -12,8 +12,9 @@ from tests.experiments.study_cli import run_quick_study
 @pytest.fixture(scope="module")
 def study_output(tmp_path_factory):
     out = tmp_path_factory.mktemp("npm")
-    return out, run_quick_study("noisy_pid_mc", out, "--set", "runs=300", "--set", "t_final=3.0",
-                                "--set", "kp_sweep=[0.4, 1.2, 3]")
+    return out, run_quick_study(
+        "noisy_pid_mc", out, "--set", "runs=300", "--set", "t_final=3.0", "--set", "kp_sweep=[0.4, 1.2, 3]"
+    )
 
 
 def test_quick_preset_and_overrides_are_what_ran(study_output):

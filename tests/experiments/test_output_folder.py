@@ -47,8 +47,10 @@ def fake(monkeypatch):
         tables = {f"table{i}": [{"i": i, "value": cfg.answer}] for i in range(cfg.tables)}
         return StudyResult(metrics={"answer": cfg.answer}, tables=tables, figures={"plot": fig})
 
-    studies = {name: Study(name, "a fake study", Config, run, per_run=lambda cfg: PerRun(_metric, {"a": 1.0}))
-               for name in ("fake", "other_fake")}
+    studies = {
+        name: Study(name, "a fake study", Config, run, per_run=lambda cfg: PerRun(_metric, {"a": 1.0}))
+        for name in ("fake", "other_fake")
+    }
     original = registry.get_study
 
     def get_study(name):
@@ -84,6 +86,7 @@ def read_only(monkeypatch):
             folder.chmod(0o555)
             chmodded.append(folder)
         else:
+
             def inside(path):
                 try:
                     return Path(os.fsdecode(path)).absolute().is_relative_to(folder)
@@ -150,8 +153,7 @@ def test_run_refuses_another_studys_output_and_a_sweep_folder(tmp_path, fake, ca
 
 
 @pytest.mark.parametrize("exchange", [True, False], ids=["renameat2", "two-renames"])
-def test_run_replaces_its_own_previous_output_and_leaves_no_stale_file(tmp_path, fake, capsys, monkeypatch,
-                                                                         exchange):
+def test_run_replaces_its_own_previous_output_and_leaves_no_stale_file(tmp_path, fake, capsys, monkeypatch, exchange):
     if not exchange:
         monkeypatch.setattr(output_folder, "_exchange", lambda a, b: False)
     out = tmp_path / "out"
@@ -245,11 +247,17 @@ def test_sweep_refuses_a_users_files_and_keeps_its_own_folder_tidy_across_resume
     args = ["sweep", "fake", "--runs", "10", "--param", "a=0:1:2", "--out", str(out)]
     assert cli.main([*args, "--keep-runs", "2"]) == 0
     report = {MARKER, "results.json", "sweep.csv", "raw_runs.csv", "sweep_y.png"}
-    assert set(_snapshot(out)) == report | {"manifest.json", "chunks/p00000_c000000.chunk",
-                                            "chunks/p00001_c000000.chunk"}
+    assert set(_snapshot(out)) == report | {
+        "manifest.json",
+        "chunks/p00000_c000000.chunk",
+        "chunks/p00001_c000000.chunk",
+    }
     assert cli.main([*args, "--resume"]) == 0  # resumed without --keep-runs: raw_runs.csv is stale now
-    assert set(_snapshot(out)) == (report - {"raw_runs.csv"}) | {"manifest.json", "chunks/p00000_c000000.chunk",
-                                                                "chunks/p00001_c000000.chunk"}
+    assert set(_snapshot(out)) == (report - {"raw_runs.csv"}) | {
+        "manifest.json",
+        "chunks/p00000_c000000.chunk",
+        "chunks/p00001_c000000.chunk",
+    }
     marker = json.loads((out / MARKER).read_text())
     assert (marker["command"], marker["study"]) == ("sweep", "fake")
     assert marker["files"] == ["results.json", "sweep.csv", "sweep_y.png"]

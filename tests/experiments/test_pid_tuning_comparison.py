@@ -60,8 +60,12 @@ def test_budgets_are_equal_and_ipopt_is_the_optimum(study_output):
 def test_reproduction_table(study_output):
     out, res = study_output
     rows = {r["metric"]: r for r in res["reproduction"]}
-    assert set(rows) == {"jax_vs_casadi_loss_rel_diff", "jax_vs_casadi_grad_rel_diff", "gap_to_ipopt_gradient_lbfgs",
-                         "gradient_vs_ipopt_gain_rel_diff"}
+    assert set(rows) == {
+        "jax_vs_casadi_loss_rel_diff",
+        "jax_vs_casadi_grad_rel_diff",
+        "gap_to_ipopt_gradient_lbfgs",
+        "gradient_vs_ipopt_gain_rel_diff",
+    }
     for r in rows.values():
         assert r["verdict"] == "reproduced" and r["ours"] == res["metrics"][r["metric"]] and r["source"]
     assert [r["metric"] for r in csv.DictReader(open(out / "reproduction.csv"))] == list(rows)

@@ -30,18 +30,29 @@ def _run(cfg, progress):
     _run.calls.append(cfg)
     fig, ax = plt.subplots(figsize=(2, 2))
     ax.plot([0, 1], [0, cfg.gain])
-    return StudyResult(metrics={"gain2": cfg.gain**2, "steps": float(cfg.steps)},
-                       tables={"values": [{"gain": cfg.gain}]}, figures={"line": fig})
+    return StudyResult(
+        metrics={"gain2": cfg.gain**2, "steps": float(cfg.steps)},
+        tables={"values": [{"gain": cfg.gain}]},
+        figures={"line": fig},
+    )
 
 
 _run.calls = []
 
-CLAIMS = [Claim("gain2", paper=4.0, rel_tol=1e-12, source="closed form"),
-          Claim("steps", paper=100.0, band=(90.0, 110.0), source="Table 1"),
-          Claim("missing", paper=1.0, abs_tol=0.1, source="Fig. 3")]
-FAKE = Study(name="fake_new", description="a <fake> study", config=Config, run=_run,
-             presets={"quick": {"steps": 10}, "tiny": {"steps": 1, "gain": 3.0}}, claims=CLAIMS,
-             assumptions={"gain": assumption(2.0, "why not")})
+CLAIMS = [
+    Claim("gain2", paper=4.0, rel_tol=1e-12, source="closed form"),
+    Claim("steps", paper=100.0, band=(90.0, 110.0), source="Table 1"),
+    Claim("missing", paper=1.0, abs_tol=0.1, source="Fig. 3"),
+]
+FAKE = Study(
+    name="fake_new",
+    description="a <fake> study",
+    config=Config,
+    run=_run,
+    presets={"quick": {"steps": 10}, "tiny": {"steps": 1, "gain": 3.0}},
+    claims=CLAIMS,
+    assumptions={"gain": assumption(2.0, "why not")},
+)
 
 
 @pytest.fixture
@@ -59,17 +70,18 @@ def fake(monkeypatch):
 
 
 def test_claim_verdicts_and_tolerances():
-    rows = check_claims(CLAIMS + [Claim("gain2", paper=4.1, abs_tol=0.05, rel_tol=0.01)],
-                        {"gain2": 4.0, "steps": 95.0})
+    rows = check_claims(CLAIMS + [Claim("gain2", paper=4.1, abs_tol=0.05, rel_tol=0.01)], {"gain2": 4.0, "steps": 95.0})
     assert [r["verdict"] for r in rows] == ["reproduced", "reproduced", "not computed", "differs"]
     assert [r["tolerance"] for r in rows] == ["rel 1e-12", "band [90, 110]", "abs 0.1", "abs 0.05 + rel 0.01"]
     assert rows[2]["ours"] is None and rows[1]["source"] == "Table 1"
     # |4.0 − 4.1| = 0.1 > 0.05 + 0.041; and a NaN result differs
     assert Claim("x", paper=1.0, rel_tol=1.0).row({"x": float("nan")})["verdict"] == "differs"
-    for bad, match in [(dict(), "give rel_tol and/or abs_tol, or band"),
-                       (dict(band=(1.0, 0.0)), r"band: need finite lo ≤ hi"),
-                       (dict(band=(0.0, 1.0), rel_tol=0.1), "band excludes"),
-                       (dict(rel_tol=-1.0), "rel_tol: must be finite and non-negative")]:
+    for bad, match in [
+        (dict(), "give rel_tol and/or abs_tol, or band"),
+        (dict(band=(1.0, 0.0)), r"band: need finite lo ≤ hi"),
+        (dict(band=(0.0, 1.0), rel_tol=0.1), "band excludes"),
+        (dict(rel_tol=-1.0), "rel_tol: must be finite and non-negative"),
+    ]:
         with pytest.raises(ValueError, match=match):
             Claim("x", paper=1.0, **bad)
 
@@ -117,7 +129,8 @@ def test_registry_is_lazy_and_a_broken_study_breaks_only_itself(tmp_path, monkey
     (tmp_path / "zz_broken_study.py").write_text("raise RuntimeError('this study is broken')\n")
     (tmp_path / "zz_tiny_study.py").write_text(
         "from experiments.runner import Study\nfrom tests.experiments.test_runner import Config, _run\n"
-        "STUDY = Study('zz_tiny_study', 'tiny', Config, _run)\n")
+        "STUDY = Study('zz_tiny_study', 'tiny', Config, _run)\n"
+    )
     monkeypatch.setattr(experiments, "__path__", [*experiments.__path__, str(tmp_path)])
     try:
         study = registry.get_study("zz_tiny_study")

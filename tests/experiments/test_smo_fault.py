@@ -10,8 +10,16 @@ from tests.experiments.study_cli import run_quick_study
 
 pytestmark = pytest.mark.slow  # a short study run through the CLI: a few compilations
 
-SHORT = {"t_final": 3.3, "sample_period": 1e-4, "reference_step_ratio": 2, "reference_t_final": 3.2,
-         "mc_samples": 2, "tune_steps": 2, "tune_window": 0.3, "tune_keys": 1}
+SHORT = {
+    "t_final": 3.3,
+    "sample_period": 1e-4,
+    "reference_step_ratio": 2,
+    "reference_t_final": 3.2,
+    "mc_samples": 2,
+    "tune_steps": 2,
+    "tune_window": 0.3,
+    "tune_keys": 1,
+}
 
 
 @pytest.fixture(scope="module")
@@ -34,8 +42,15 @@ def test_config_is_the_quick_preset_with_the_overrides_and_is_what_ran(result):
     assert [r["step"] for r in res["tables"]["tuning_history"]] == [0, 1]
     for key in ("drive_equations", "arm_coupling", "sensors", "sample_period", "width", "pid"):
         assert res["assumptions"][key]["why"]
-    for name in ("integration.csv", "monte_carlo.csv", "tuning_history.csv", "identification.png",
-                 "monte_carlo.png", "tuning.png", "reproduction.csv"):
+    for name in (
+        "integration.csv",
+        "monte_carlo.csv",
+        "tuning_history.csv",
+        "identification.png",
+        "monte_carlo.png",
+        "tuning.png",
+        "reproduction.csv",
+    ):
         assert (out / name).exists(), name
 
 

@@ -24,8 +24,14 @@ def two_device_sweep(tmp_path_factory):
     out = tmp_path_factory.mktemp("cli") / "sweep"
     env = {**os.environ, "JAX_COMPILATION_CACHE_DIR": str(CACHE_DIR)}
     env["XLA_FLAGS"] = " ".join(f for f in env.get("XLA_FLAGS", "").split() if "device_count" not in f)
-    proc = subprocess.run([sys.executable, "-m", "experiments", *ARGS, "--devices", "2", "--keep-runs", "3",
-                           "--out", str(out)], capture_output=True, text=True, cwd=ROOT, env=env, timeout=600)
+    proc = subprocess.run(
+        [sys.executable, "-m", "experiments", *ARGS, "--devices", "2", "--keep-runs", "3", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        env=env,
+        timeout=600,
+    )
     assert proc.returncode == 0, proc.stderr
     assert "run/s" in proc.stderr  # the progress bar reports throughput
     return out
@@ -35,8 +41,15 @@ def two_device_sweep(tmp_path_factory):
 def one_device_rows():
     cfg = STUDY.default_config(quick=True)
     spec = STUDY.per_run(cfg)
-    result = mc.sweep(spec.metric, {**spec.nominal, **spec.uncertain}, mc.grid({"kp": (0.4, 1.2, 3)}),
-                      1500, 0, chunk_size=1000, devices=1)
+    result = mc.sweep(
+        spec.metric,
+        {**spec.nominal, **spec.uncertain},
+        mc.grid({"kp": (0.4, 1.2, 3)}),
+        1500,
+        0,
+        chunk_size=1000,
+        devices=1,
+    )
     return json.loads(json.dumps(result.table()))
 
 
@@ -67,14 +80,17 @@ def test_resume_through_the_cli_on_one_device_reuses_every_chunk(two_device_swee
     assert res["tables"]["sweep"] == one_device_rows
 
 
-@pytest.mark.parametrize("extra, match", [
-    (["--param", "kp=1.2:0.4:3"], "kp: range has lo=1.2 > hi=0.4"),
-    (["--param", "nope=0:1:2"], "nope: unknown parameter"),
-    (["--param", "K=1:2:2"], "K: is drawn from a distribution"),
-    (["--param", "kp=0:1"], "a grid needs lo:hi:n"),
-    (["--param", "kp=0:1", "--design", "sobol"], "--points: required"),
-    (["--runs", "0"], "--runs: must be ≥ 1"),
-])
+@pytest.mark.parametrize(
+    "extra, match",
+    [
+        (["--param", "kp=1.2:0.4:3"], "kp: range has lo=1.2 > hi=0.4"),
+        (["--param", "nope=0:1:2"], "nope: unknown parameter"),
+        (["--param", "K=1:2:2"], "K: is drawn from a distribution"),
+        (["--param", "kp=0:1"], "a grid needs lo:hi:n"),
+        (["--param", "kp=0:1", "--design", "sobol"], "--points: required"),
+        (["--runs", "0"], "--runs: must be ≥ 1"),
+    ],
+)
 def test_cli_rejects_bad_sweeps(tmp_path, capsys, extra, match):
     argv = ["sweep", "noisy_pid_mc", "--quick", "--runs", "100", "--out", str(tmp_path / "x"), *extra]
     assert main(argv) == 2
@@ -84,8 +100,23 @@ def test_cli_rejects_bad_sweeps(tmp_path, capsys, extra, match):
 
 def test_cli_refuses_a_folder_of_another_sweep_and_a_study_without_per_run(two_device_sweep, capsys):
     before = {p: p.read_bytes() for p in two_device_sweep.rglob("*") if p.is_file()}
-    assert main(["sweep", "noisy_pid_mc", "--quick", "--param", "kp=0.4:1.2:3", "--runs", "1600",
-                 "--out", str(two_device_sweep), "--resume"]) == 2
+    assert (
+        main(
+            [
+                "sweep",
+                "noisy_pid_mc",
+                "--quick",
+                "--param",
+                "kp=0.4:1.2:3",
+                "--runs",
+                "1600",
+                "--out",
+                str(two_device_sweep),
+                "--resume",
+            ]
+        )
+        == 2
+    )
     assert "holds a different sweep" in capsys.readouterr().err
     assert {p: p.read_bytes() for p in two_device_sweep.rglob("*") if p.is_file()} == before
     assert main(["sweep", "linear_pid_accuracy", "--runs", "10"]) == 2
@@ -116,10 +147,30 @@ def test_the_readme_multi_host_commands_on_loopback_match_one_device(tmp_path, o
         port = s.getsockname()[1]
     env = {**os.environ, "JAX_COMPILATION_CACHE_DIR": str(CACHE_DIR)}
     env["XLA_FLAGS"] = " ".join(f for f in env.get("XLA_FLAGS", "").split() if "device_count" not in f)
-    procs = [subprocess.Popen([sys.executable, "-m", "experiments", *ARGS, "--out", str(tmp_path / f"p{i}"),
-                               "--coordinator", f"127.0.0.1:{port}", "--num-processes", "2", "--process-id", str(i)],
-                              cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-             for i in range(2)]
+    procs = [
+        subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "experiments",
+                *ARGS,
+                "--out",
+                str(tmp_path / f"p{i}"),
+                "--coordinator",
+                f"127.0.0.1:{port}",
+                "--num-processes",
+                "2",
+                "--process-id",
+                str(i),
+            ],
+            cwd=ROOT,
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for i in range(2)
+    ]
     try:
         logs = [p.communicate(timeout=600) for p in procs]
     finally:

@@ -41,8 +41,12 @@ def test_tables_agree_and_claims_are_checked(study_output):
         assert designs[name]["loss"] == pytest.approx(m[f"loss_{name}"], rel=1e-9), name
     # Adam from Bryson's rule keeps its best point: never above the start
     assert m["loss_gradient"] <= m["loss_start"] == designs["bryson_start"]["loss"]
-    total = designs["gradient"]["itae"] + 0.01 * designs["gradient"]["energy"] + \
-        10.0 * designs["gradient"]["saturation"] + designs["gradient"]["stability_penalty"]
+    total = (
+        designs["gradient"]["itae"]
+        + 0.01 * designs["gradient"]["energy"]
+        + 10.0 * designs["gradient"]["saturation"]
+        + designs["gradient"]["stability_penalty"]
+    )
     assert designs["gradient"]["loss"] == pytest.approx(total, rel=1e-12)
     mc_rows = {r["design"]: r for r in res["tables"]["monte_carlo"]}
     for name in ("gradient", "pso"):

@@ -10,9 +10,9 @@ import pytest
 
 import jaxsim.montecarlo as mc
 from experiments.vessel_tracking import Config
-from jaxsim.problem.vessel_tracking import loss_space, phases, simulate
 from jaxsim.estimation.track_loss import miss_distances, track_lost
 from jaxsim.estimation.window_selector import fixed_window, predicted_plots, select_estimates, window_bank_filter
+from jaxsim.problem.vessel_tracking import loss_space, phases, simulate
 from tests.experiments.study_cli import run_quick_study
 
 
@@ -30,8 +30,14 @@ def test_quick_study_reproduces_the_paper_within_30_percent(quick):
     ok = {(r["quantity"], r["speed_ms"]): r["within_30pct"] for r in rows}
     by = {(r["quantity"], r["speed_ms"]): r["mc_mean"] for r in rows}
     for speed in (10.0, 20.0):
-        for q in ("error in the turn, peak (m)", "window on straight legs (median)", "window in the turn (median)",
-                  "σ̂ settles (scans, within 10 %)", "σ̂ final (m)", "error on straight legs, RMS (m)"):
+        for q in (
+            "error in the turn, peak (m)",
+            "window on straight legs (median)",
+            "window in the turn (median)",
+            "σ̂ settles (scans, within 10 %)",
+            "σ̂ final (m)",
+            "error on straight legs, RMS (m)",
+        ):
             assert ok[(q, speed)], (q, speed, by[(q, speed)])
     # the documented difference: the straight-leg peak at 20 m/s includes the scans just after the turn
     assert ok[("error on straight legs, peak (m)", 10.0)]
@@ -112,7 +118,7 @@ def test_track_loss_monte_carlo_equals_a_direct_loop():
         worst = 0.0
         for t in range(len(z)):
             if sc.times[t] >= cfg.warm_up:  # the window of 5 is full long before
-                worst = max(worst, float(np.linalg.norm(z[t] - _line_prediction(z[t - 5:t], cfg.scan_period))))
+                worst = max(worst, float(np.linalg.norm(z[t] - _line_prediction(z[t - 5 : t], cfg.scan_period))))
         count += worst > gates
     np.testing.assert_array_equal(np.round(res["lost"].probability * n).astype(int), count)
     assert 0 < count[-1] < count[0] <= n  # the gates were chosen so the events are informative

@@ -85,11 +85,14 @@ def test_place_and_acker():
     assert rel_diff(sorted_roots(np.linalg.eigvals(a - b @ k)), sorted_roots(poles)) < TOL
 
 
-@pytest.mark.parametrize("m, poles", [
-    (2, [-1.0, -1.0, -2.0, -2.0]),  # each pole repeated rank(B) times
-    (4, [-1.0 + 1.0j, -1.0 - 1.0j, -2.0, -3.0]),  # B square
-    (4, [-1.0, -1.0, -1.0, -1.0]),
-])
+@pytest.mark.parametrize(
+    "m, poles",
+    [
+        (2, [-1.0, -1.0, -2.0, -2.0]),  # each pole repeated rank(B) times
+        (4, [-1.0 + 1.0j, -1.0 - 1.0j, -2.0, -3.0]),  # B square
+        (4, [-1.0, -1.0, -1.0, -1.0]),
+    ],
+)
 def test_place_repeated_poles_and_square_b(m, poles):
     """Both gave NaN gains before: the starting eigenvectors of a repeated pole (or, with ``B``
     square, of every pole) coincided."""
@@ -154,8 +157,10 @@ def test_continuous_time_responses(seed):
             assert _both(lt.impulse_response(ours, T), ct.impulse_response(sys, T)) < TOL
             assert _both(lt.initial_response(ours, T, x0), ct.initial_response(sys, T, x0)) < TOL
             assert _both(lt.forced_response(ours, T, u, x0), ct.forced_response(sys, T, u, x0)) < TOL
-            assert _both(lt.step_response(ours, T, input=m - 1, output=0),
-                         ct.step_response(sys, T, input=m - 1, output=0)) < TOL
+            assert (
+                _both(lt.step_response(ours, T, input=m - 1, output=0), ct.step_response(sys, T, input=m - 1, output=0))
+                < TOL
+            )
 
 
 def test_discrete_time_responses():
@@ -219,7 +224,8 @@ def _margins_reference(loop):
 
 def _loop(seed: int) -> ct.TransferFunction:
     """A fourth-order loop ``k·C·P``: a PI (even seeds) or lead controller ``C`` and a stable third-order
-    plant ``P`` with random (seeded) coefficients (one size: one compilation of each margin function).  A transfer function: python-control's
+    plant ``P`` with random (seeded) coefficients (one size: one compilation of each margin function).  A transfer
+    function: python-control's
     polynomial method on it is exact, while its ``ss → tf`` conversion leaves rounding-level leading
     coefficients that it reports as phase crossovers near 10⁸ rad/s."""
     rng = np.random.default_rng(seed)
@@ -261,8 +267,9 @@ def test_discrete_margins():
     """A sampled loop whose margins python-control computes with its polynomial method (no FRD
     fallback): gain and phase margins, crossovers and the stability margin (python-control finds the
     frequency of the latter with ``scipy.optimize.minimize``, to about 1e-5: not compared)."""
-    loop = ct.c2d(ct.ss(ct.tf([40.0], [1.0, 1.0]) * ct.tf([1.0, 0.5], [1.0, 5.0]) * ct.tf([1.0], [1.0, 2.0])),
-                  0.1, "zoh")
+    loop = ct.c2d(
+        ct.ss(ct.tf([40.0], [1.0, 1.0]) * ct.tf([1.0, 0.5], [1.0, 5.0]) * ct.tf([1.0], [1.0, 2.0])), 0.1, "zoh"
+    )
     (gm, pm, sm, wpc, wgc, _), dm = _margins_reference(loop)
     ours = lt.stability_margins(to_ours(loop))
     for got, want in zip((ours.gm, ours.pm, ours.sm, ours.wpc, ours.wgc), (gm, pm, sm, wpc, wgc)):
@@ -287,8 +294,15 @@ def test_a_nonlinear_plant_is_integrated_by_the_toolkits_solver():
 
     siso, _ = _systems(3)
     a, b, c = (np.asarray(m) for m in (siso.A, siso.B, siso.C))
-    plant = Plant(params=None, dynamics=lambda p, x, u, t: a @ x + b @ u, output=lambda p, x: c @ x,
-                  n_states=N, n_inputs=1, n_outputs=1, name="generic")
+    plant = Plant(
+        params=None,
+        dynamics=lambda p, x, u, t: a @ x + b @ u,
+        output=lambda p, x: c @ x,
+        n_states=N,
+        n_inputs=1,
+        n_outputs=1,
+        name="generic",
+    )
     t = np.linspace(0.0, 4.0, 41)
     u = np.sin(t)
     ref = ct.forced_response(ct.ss(a, b, c, 0.0), t, u)

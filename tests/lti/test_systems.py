@@ -40,8 +40,9 @@ def test_continuous_systems_are_plants_and_discrete_ones_state_spaces():
     g = lt.tf([2.0, 1.0], [1.0, 3.0])  # biproper: D = 2
     assert isinstance(g, Plant) and g.feedthrough is not None
     np.testing.assert_allclose(np.asarray(g.params.d), [[2.0]])
-    np.testing.assert_allclose(np.asarray(g.h(jnp.array([0.5]), jnp.array([1.0]))),
-                               np.asarray(g.params.c @ jnp.array([0.5]) + 2.0))
+    np.testing.assert_allclose(
+        np.asarray(g.h(jnp.array([0.5]), jnp.array([1.0]))), np.asarray(g.params.c @ jnp.array([0.5]) + 2.0)
+    )
     gd = lt.tf([1.0], [1.0, -0.5], dt=0.1)
     assert isinstance(gd, lt.StateSpace) and gd.dt == 0.1
     assert lt.ss(-1.0, 1.0, 1.0, 0.0).n_states == 1  # python-control's scalar form
@@ -52,10 +53,14 @@ def test_a_tf_plant_runs_in_a_closed_loop_like_python_controls_sampled_loop():
     """P control of 1/(s² + s + 1) with zero-order hold: the loop matches python-control's
     ``feedback(c2d(P), K)`` sampled at the ticks."""
     plant, kp, ts = lt.tf([1.0], [1.0, 1.0, 1.0]), 2.0, 0.1
-    ctrl = Controller(params=jnp.asarray(kp), init=lambda p, r0, y0: jnp.zeros(()),
-                      step=lambda p, s, r, y, dt, t=None: (s, p * (r - y)))
-    tr = simulate(ClosedLoop(plant, ctrl, reference=Step(1.0)), jnp.zeros(2), Timing(2.0, ts),
-                  solver=ExponentialEuler())
+    ctrl = Controller(
+        params=jnp.asarray(kp),
+        init=lambda p, r0, y0: jnp.zeros(()),
+        step=lambda p, s, r, y, dt, t=None: (s, p * (r - y)),
+    )
+    tr = simulate(
+        ClosedLoop(plant, ctrl, reference=Step(1.0)), jnp.zeros(2), Timing(2.0, ts), solver=ExponentialEuler()
+    )
     ref = ct.step_response(ct.feedback(kp * ct.c2d(ct.tf([1.0], [1.0, 1.0, 1.0]), ts), 1), np.arange(20) * ts)
     np.testing.assert_allclose(np.asarray(tr.y[:, 0]), ref.outputs, rtol=1e-12, atol=1e-14)
 
@@ -69,8 +74,10 @@ def test_series_parallel_feedback_agree_with_python_control(seed):
     assert rel_diff(_response(lt.series(to_ours(g1), to_ours(g2))), _reference(ct.series(g1, g2))) < 1e-12
     assert rel_diff(_response(lt.parallel(to_ours(g1), to_ours(g3))), _reference(ct.parallel(g1, g3))) < 1e-12
     for sign in (-1, 1):
-        assert rel_diff(_response(lt.feedback(to_ours(g1), to_ours(g2), sign)),
-                        _reference(ct.feedback(g1, g2, sign))) < 1e-11
+        assert (
+            rel_diff(_response(lt.feedback(to_ours(g1), to_ours(g2), sign)), _reference(ct.feedback(g1, g2, sign)))
+            < 1e-11
+        )
 
 
 def test_gains_and_discrete_parts_combine():

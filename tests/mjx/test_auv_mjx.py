@@ -31,14 +31,17 @@ def test_rigid_body_trajectory_matches_ode():
     """5 s of body-frame forces and moments (all six channels, tumbling motion): MuJoCo free body
     (``mjx.step``, h = 1 ms) vs RK4 on the Fossen rigid-body equations ``M_R ν̇ + C_R(ν) ν = τ`` with
     zero added mass, damping and restoring forces.  Stated tolerance: 2e-3 (m, rad, m/s, rad/s)."""
-    inputs = Sine(amplitude=jnp.array([50.0, 30.0, 20.0, 5.0, 8.0, 6.0]),
-                  frequency=jnp.array([0.2, 0.3, 0.25, 0.4, 0.35, 0.3]),
-                  offset=jnp.array([20.0, 0.0, 0.0, 1.0, 0.0, 0.0]))
+    inputs = Sine(
+        amplitude=jnp.array([50.0, 30.0, 20.0, 5.0, 8.0, 6.0]),
+        frequency=jnp.array([0.2, 0.3, 0.25, 0.4, 0.35, 0.3]),
+        offset=jnp.array([20.0, 0.0, 0.0, 1.0, 0.0, 0.0]),
+    )
     timing = Timing(t_final=5.0, dt=1e-3, controller_period=0.01)
 
     def run(plant, x0, solver):
-        return simulate(ClosedLoop(plant=plant, controller=feedforward(), reference=inputs), x0, timing,
-                        solver=solver).x
+        return simulate(
+            ClosedLoop(plant=plant, controller=feedforward(), reference=inputs), x0, timing, solver=solver
+        ).x
 
     x_ode = jax.jit(lambda p, x: run(p, x, RK4))(ode_rigid_body_plant(), X0)
     x_mjx = jax.jit(lambda p, x: run(p, x, EULER))(auv_mjx_plant(field="step"), to_mjx_state(X0))

@@ -43,8 +43,9 @@ def test_trajectory_matches_ode():
     x0 = jnp.concatenate([jnp.zeros(6), P.kf * u_hover])
 
     def run(plant, solver):
-        return simulate(ClosedLoop(plant=plant, controller=feedforward(), reference=inputs), x0, timing,
-                        solver=solver).x
+        return simulate(
+            ClosedLoop(plant=plant, controller=feedforward(), reference=inputs), x0, timing, solver=solver
+        ).x
 
     ode, mjx = heli.helicopter_plant(P), helicopter_mjx_plant(P, field="step")
     x_ode = jax.jit(lambda plant: run(plant, HEUN))(ode)  # O(h²) ≈ 1e-6: negligible next to MuJoCo's O(h)

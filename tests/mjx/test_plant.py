@@ -11,10 +11,10 @@ pytest.importorskip("mujoco.mjx")
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
+from jaxsim.control.open_loop import feedforward  # noqa: E402
 from jaxsim.core.integrators import EULER  # noqa: E402
 from jaxsim.core.rollout import ClosedLoop, Timing, simulate  # noqa: E402
 from jaxsim.core.signals import Sine  # noqa: E402
-from jaxsim.control.open_loop import feedforward  # noqa: E402
 from jaxsim.mjx import mjcf_params, mjcf_plant, qpos_rate, step_sequence  # noqa: E402
 
 # A damped double pendulum (two hinges, two motors) next to a free-floating body (quaternion qpos).
@@ -63,7 +63,7 @@ def test_step_sequence_equals_c_mujoco(model):
     controls = np.stack([0.3 * np.sin(0.05 * k), -0.2 * np.cos(0.03 * k)], axis=1)
     xs = np.asarray(jax.jit(step_sequence)(mjcf_params(model), jnp.asarray(x0), jnp.asarray(controls)))
     data = mujoco.MjData(model)
-    data.qpos[:], data.qvel[:] = x0[: model.nq], x0[model.nq:]
+    data.qpos[:], data.qvel[:] = x0[: model.nq], x0[model.nq :]
     expected = []
     for u in controls:
         data.ctrl[:] = u
@@ -72,11 +72,15 @@ def test_step_sequence_equals_c_mujoco(model):
     np.testing.assert_allclose(xs, np.array(expected), atol=1e-9, rtol=0)
     # the step-field plant simulated with Euler at dt = timestep is the same map
     plant = mjcf_plant(model, field="step")
-    loop = ClosedLoop(plant=plant, controller=feedforward(),
-                      reference=Sine(amplitude=jnp.array([0.3, -0.2]), frequency=jnp.array([0.0, 0.0]),
-                                     phase=jnp.array([np.pi / 2, np.pi / 2])))
+    loop = ClosedLoop(
+        plant=plant,
+        controller=feedforward(),
+        reference=Sine(
+            amplitude=jnp.array([0.3, -0.2]), frequency=jnp.array([0.0, 0.0]), phase=jnp.array([np.pi / 2, np.pi / 2])
+        ),
+    )
     traj = jax.jit(lambda x: simulate(loop, x, Timing(t_final=0.2, dt=0.002), solver=EULER))(jnp.asarray(x0))
-    data.qpos[:], data.qvel[:] = x0[: model.nq], x0[model.nq:]
+    data.qpos[:], data.qvel[:] = x0[: model.nq], x0[model.nq :]
     data.ctrl[:] = [0.3, -0.2]
     for _ in range(100):
         mujoco.mj_step(model, data)
@@ -91,9 +95,9 @@ def test_forward_field_matches_c_mujoco(model):
     plant = mjcf_plant(model)
     xdot = np.asarray(jax.jit(plant.f)(jnp.asarray(x0), jnp.asarray(u), 0.0))
     data = mujoco.MjData(model)
-    data.qpos[:], data.qvel[:], data.ctrl[:] = x0[: model.nq], x0[model.nq:], u
+    data.qpos[:], data.qvel[:], data.ctrl[:] = x0[: model.nq], x0[model.nq :], u
     mujoco.mj_forward(model, data)
-    np.testing.assert_allclose(xdot[model.nq:], data.qacc, atol=1e-10)
+    np.testing.assert_allclose(xdot[model.nq :], data.qacc, atol=1e-10)
     eps = 1e-7
     qa, qb = data.qpos.copy(), data.qpos.copy()
     mujoco.mj_integratePos(model, qa, data.qvel, eps)

@@ -73,8 +73,9 @@ def test_trajectory_matches_ode(hover):
     timing = Timing(t_final=10.0, dt=1e-3, controller_period=0.01)
 
     def run(plant, x0, solver):
-        return simulate(ClosedLoop(plant=plant, controller=feedforward(), reference=inputs), x0, timing,
-                        solver=solver).x
+        return simulate(
+            ClosedLoop(plant=plant, controller=feedforward(), reference=inputs), x0, timing, solver=solver
+        ).x
 
     x_ode = jax.jit(lambda x0: run(trms.trms_plant(P), x0, RK4))(x_eq)
     x_mjx = ode_state(jax.jit(lambda x0: run(trms_mjx_plant(P, field="step"), x0, EULER))(x_eq[TO_ODE]))

@@ -16,8 +16,9 @@ def _save(path, result):
     import jax
     import numpy as np
 
-    np.savez(path, __devices__=np.array(len(jax.devices())), __processes__=np.array(jax.process_count()),
-             **result.arrays())
+    np.savez(
+        path, __devices__=np.array(len(jax.devices())), __processes__=np.array(jax.process_count()), **result.arrays()
+    )
 
 
 def main(argv):
@@ -25,8 +26,9 @@ def main(argv):
     if mode == "distributed":
         import jax
 
-        jax.distributed.initialize(f"127.0.0.1:{argv[2]}", num_processes=2, process_id=int(argv[1]),
-                                   initialization_timeout=120)
+        jax.distributed.initialize(
+            f"127.0.0.1:{argv[2]}", num_processes=2, process_id=int(argv[1]), initialization_timeout=120
+        )
     import jaxsim.montecarlo as mc
     from tests.montecarlo._demo import SPACE, demo_fn, slow_progress
 
@@ -37,8 +39,16 @@ def main(argv):
         _save(argv[3], mc.monte_carlo(demo_fn, SPACE, N, KEY, chunk_size=CHUNK, out=out))
     elif mode == "sweep":
         design = mc.grid({"fixed": (1.0, 3.0, 2)})
-        mc.sweep(demo_fn, SPACE, design, SWEEP_N, KEY, chunk_size=SWEEP_CHUNK, out=argv[1],
-                 progress=slow_progress(float(argv[2])))
+        mc.sweep(
+            demo_fn,
+            SPACE,
+            design,
+            SWEEP_N,
+            KEY,
+            chunk_size=SWEEP_CHUNK,
+            out=argv[1],
+            progress=slow_progress(float(argv[2])),
+        )
     else:
         raise SystemExit(f"unknown mode {mode}")
 

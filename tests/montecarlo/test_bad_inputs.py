@@ -13,15 +13,21 @@ def _fn(key, p):
 SPACE = {"a": mc.normal(0.0, 1.0), "k": 1.0}
 
 
-@pytest.mark.parametrize("design", [
-    mc.grid({"b": (0.0, 1.0, 2)}),
-    mc.points(["k", "gain"], [[1.0, 2.0]]),
-    mc.latin_hypercube({"K": (0.0, 1.0)}, 2),  # names are case-sensitive
-])
+@pytest.mark.parametrize(
+    "design",
+    [
+        mc.grid({"b": (0.0, 1.0, 2)}),
+        mc.points(["k", "gain"], [[1.0, 2.0]]),
+        mc.latin_hypercube({"K": (0.0, 1.0)}, 2),  # names are case-sensitive
+    ],
+)
 def test_design_parameter_absent_from_the_space_is_rejected(design):
     missing = [n for n in design.names if n not in SPACE][0]
-    with pytest.raises(ValueError, match=rf"^design: parameter '{missing}' is not in the space; "
-                                         r"the space's parameters: a, k"):
+    with pytest.raises(
+        ValueError,
+        match=rf"^design: parameter '{missing}' is not in the space; "
+        r"the space's parameters: a, k",
+    ):
         mc.sweep(_fn, SPACE, design, 10, 0)
 
 

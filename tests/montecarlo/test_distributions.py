@@ -15,15 +15,18 @@ def _samples(dist, n=N, seed=0):
     return np.asarray(jax.vmap(dist.sample)(keys))
 
 
-@pytest.mark.parametrize("dist, oracle", [
-    (mc.normal(1.5, 0.3), stats.norm(1.5, 0.3)),
-    (mc.uniform(-2.0, 5.0), stats.uniform(-2.0, 7.0)),
-    (mc.lognormal(0.2, 0.5), stats.lognorm(s=0.5, scale=np.exp(0.2))),
-    (mc.truncated_normal(1.0, 2.0, 0.0, 2.5), stats.truncnorm(-0.5, 0.75, loc=1.0, scale=2.0)),
-    (mc.truncated_normal(0.0, 1.0, low=1.0), stats.truncnorm(1.0, np.inf)),
-    (mc.deviation(3.0, 0.5), stats.uniform(2.5, 1.0)),
-    (mc.deviation(-4.0, 0.2, relative=True), stats.uniform(-4.8, 1.6)),
-])
+@pytest.mark.parametrize(
+    "dist, oracle",
+    [
+        (mc.normal(1.5, 0.3), stats.norm(1.5, 0.3)),
+        (mc.uniform(-2.0, 5.0), stats.uniform(-2.0, 7.0)),
+        (mc.lognormal(0.2, 0.5), stats.lognorm(s=0.5, scale=np.exp(0.2))),
+        (mc.truncated_normal(1.0, 2.0, 0.0, 2.5), stats.truncnorm(-0.5, 0.75, loc=1.0, scale=2.0)),
+        (mc.truncated_normal(0.0, 1.0, low=1.0), stats.truncnorm(1.0, np.inf)),
+        (mc.deviation(3.0, 0.5), stats.uniform(2.5, 1.0)),
+        (mc.deviation(-4.0, 0.2, relative=True), stats.uniform(-4.8, 1.6)),
+    ],
+)
 def test_samples_follow_the_scipy_distribution(dist, oracle):
     x = _samples(dist)
     assert stats.kstest(x, oracle.cdf).pvalue > 1e-3
@@ -40,17 +43,20 @@ def test_array_parameters_broadcast_and_use_each_element():
     np.testing.assert_allclose(x.max(axis=0), [1.1, 11.0, 110.0], rtol=1e-3)
 
 
-@pytest.mark.parametrize("make, match", [
-    (lambda: mc.normal(0.0, -1.0), "Normal.std"),
-    (lambda: mc.normal(np.nan, 1.0), "Normal.mean"),
-    (lambda: mc.uniform(1.0, 1.0), "Uniform.high"),
-    (lambda: mc.lognormal(0.0, 0.0), "LogNormal.sigma"),
-    (lambda: mc.truncated_normal(0.0, 1.0, 2.0, 1.0), "TruncatedNormal.high"),
-    (lambda: mc.truncated_normal(0.0, 0.0), "TruncatedNormal.std"),
-    (lambda: mc.deviation(1.0, -0.1), "Deviation.delta"),
-    (lambda: mc.deviation(1.0, 1.5, relative=True), "Deviation.delta"),
-    (lambda: mc.deviation(1.0, 0.1, relative="yes"), "Deviation.relative"),
-])
+@pytest.mark.parametrize(
+    "make, match",
+    [
+        (lambda: mc.normal(0.0, -1.0), "Normal.std"),
+        (lambda: mc.normal(np.nan, 1.0), "Normal.mean"),
+        (lambda: mc.uniform(1.0, 1.0), "Uniform.high"),
+        (lambda: mc.lognormal(0.0, 0.0), "LogNormal.sigma"),
+        (lambda: mc.truncated_normal(0.0, 1.0, 2.0, 1.0), "TruncatedNormal.high"),
+        (lambda: mc.truncated_normal(0.0, 0.0), "TruncatedNormal.std"),
+        (lambda: mc.deviation(1.0, -0.1), "Deviation.delta"),
+        (lambda: mc.deviation(1.0, 1.5, relative=True), "Deviation.delta"),
+        (lambda: mc.deviation(1.0, 0.1, relative="yes"), "Deviation.relative"),
+    ],
+)
 def test_invalid_parameters_name_the_argument(make, match):
     with pytest.raises(ValueError, match=match):
         make()

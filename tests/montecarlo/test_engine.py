@@ -90,26 +90,36 @@ def test_designs():
     assert mc.parse_range("x=-1:1") == ("x", -1.0, 1.0, None)
 
 
-@pytest.mark.parametrize("make, match", [
-    (lambda: mc.grid({"kp": (2.0, 1.0, 3)}), "kp: range has lo=2.0 > hi=1.0"),
-    (lambda: mc.latin_hypercube({"kp": (2.0, 1.0)}, 4), "kp: range"),
-    (lambda: mc.sobol({"kp": (0.0, 1.0)}, 0), "n: number of points"),
-    (lambda: mc.grid({"kp": (0.0, 1.0, 0)}), "kp: number of points"),
-    (lambda: mc.parse_range("kp=3:1:2"), "kp: range has lo"),
-    (lambda: mc.parse_range("kp=a:1"), "kp: lo and hi"),
-    (lambda: mc.parse_range("kp"), "expected name=lo:hi"),
-])
+@pytest.mark.parametrize(
+    "make, match",
+    [
+        (lambda: mc.grid({"kp": (2.0, 1.0, 3)}), "kp: range has lo=2.0 > hi=1.0"),
+        (lambda: mc.latin_hypercube({"kp": (2.0, 1.0)}, 4), "kp: range"),
+        (lambda: mc.sobol({"kp": (0.0, 1.0)}, 0), "n: number of points"),
+        (lambda: mc.grid({"kp": (0.0, 1.0, 0)}), "kp: number of points"),
+        (lambda: mc.parse_range("kp=3:1:2"), "kp: range has lo"),
+        (lambda: mc.parse_range("kp=a:1"), "kp: lo and hi"),
+        (lambda: mc.parse_range("kp"), "expected name=lo:hi"),
+    ],
+)
 def test_bad_designs_raise(make, match):
     with pytest.raises(ValueError, match=match):
         make()
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    ({"n": 0}, "n: must be in"), ({"n": -3}, "n: must be in"), ({"n": 2.5}, "n: must be an integer"),
-    ({"chunk_size": 1500}, "chunk_size: must be a multiple of block_size=1000"),
-    ({"keep_runs": 20}, "keep_runs"), ({"key": "seed"}, "key:"), ({"devices": 99}, "devices"),
-    ({"design": mc.grid({"a": (0.0, 1.0, 2)})}, "a: is drawn from a distribution"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"n": 0}, "n: must be in"),
+        ({"n": -3}, "n: must be in"),
+        ({"n": 2.5}, "n: must be an integer"),
+        ({"chunk_size": 1500}, "chunk_size: must be a multiple of block_size=1000"),
+        ({"keep_runs": 20}, "keep_runs"),
+        ({"key": "seed"}, "key:"),
+        ({"devices": 99}, "devices"),
+        ({"design": mc.grid({"a": (0.0, 1.0, 2)})}, "a: is drawn from a distribution"),
+    ],
+)
 def test_bad_arguments_raise_before_running(kwargs, match):
     args = {"n": 10, "key": 0, "design": mc.single_point(), **kwargs}
     with pytest.raises(ValueError, match=match):

@@ -32,8 +32,9 @@ X = np.float64(0.3)
 
 def test_an_edited_operation_changes_the_hash_and_an_identical_body_does_not():
     same_a = _from_source("def f(x):\n    return jnp.sin(x) * 2.0 + x\n")
-    same_b = _from_source("\n\n# moved down, another file\ndef f(x):\n    return jnp.sin(x) * 2.0 + x\n",
-                          filename="/elsewhere/other.py")
+    same_b = _from_source(
+        "\n\n# moved down, another file\ndef f(x):\n    return jnp.sin(x) * 2.0 + x\n", filename="/elsewhere/other.py"
+    )
     edited = _from_source("def f(x):\n    return jnp.cos(x) * 2.0 + x\n")
     assert _hash(same_a, X) == _hash(same_b, X)  # no file names, lines or object ids in the hash
     assert _hash(same_a, X) != _hash(edited, X)
@@ -68,7 +69,9 @@ def test_sub_jaxprs_of_jit_scan_and_cond_are_covered():
         def inner(x):
             def body(carry, _):
                 return jax.lax.cond(carry > 0, lambda v: v * c, lambda v: v - 1.0, carry), None
+
             return jax.lax.scan(body, x, None, length=3)[0]
+
         return inner
 
     assert _hash(loop(0.5), X) == _hash(loop(0.5), X)
@@ -92,8 +95,9 @@ def test_the_hash_and_the_sweep_fingerprint_are_the_same_in_separate_processes()
     outputs = []
     for seed in ("1", "2"):  # different str hashing (PYTHONHASHSEED), different object addresses
         env = {**os.environ, "PYTHONHASHSEED": seed, "PYTHONPATH": str(ROOT)}
-        proc = subprocess.run([sys.executable, "-c", _SCRIPT], capture_output=True, text=True, cwd=ROOT,
-                              env=env, timeout=300)
+        proc = subprocess.run(
+            [sys.executable, "-c", _SCRIPT], capture_output=True, text=True, cwd=ROOT, env=env, timeout=300
+        )
         assert proc.returncode == 0, proc.stderr[-3000:]
         outputs.append(proc.stdout.split())
     assert outputs[0] == outputs[1] and len(outputs[0]) == 2

@@ -48,8 +48,9 @@ def one_process_result():
 
 def test_two_host_devices_give_bitwise_identical_statistics(tmp_path, one_process_result):
     out = tmp_path / "two_devices.npz"
-    proc = subprocess.run(_worker_cmd("devices", out), env=_env(2), cwd=ROOT, capture_output=True,
-                          text=True, timeout=300)
+    proc = subprocess.run(
+        _worker_cmd("devices", out), env=_env(2), cwd=ROOT, capture_output=True, text=True, timeout=300
+    )
     assert proc.returncode == 0, proc.stderr
     _assert_equal_to(out, one_process_result, devices=2, processes=1)
 
@@ -63,9 +64,17 @@ def _free_port():
 def test_two_distributed_processes_on_loopback_match_one_process(tmp_path, one_process_result):
     port = _free_port()
     outs = [tmp_path / f"process{i}.npz" for i in range(2)]
-    procs = [subprocess.Popen(_worker_cmd("distributed", i, port, outs[i], tmp_path / "ckpt"), env=_env(1),
-                              cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-             for i in range(2)]
+    procs = [
+        subprocess.Popen(
+            _worker_cmd("distributed", i, port, outs[i], tmp_path / "ckpt"),
+            env=_env(1),
+            cwd=ROOT,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for i in range(2)
+    ]
     try:
         logs = [p.communicate(timeout=300) for p in procs]
     finally:
@@ -81,8 +90,14 @@ def test_two_distributed_processes_on_loopback_match_one_process(tmp_path, one_p
 
 def test_sweep_killed_with_sigkill_resumes_to_the_uninterrupted_result(tmp_path):
     out = tmp_path / "sweep"
-    proc = subprocess.Popen(_worker_cmd("sweep", out, 0.5), env=_env(1), cwd=ROOT,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        _worker_cmd("sweep", out, 0.5),
+        env=_env(1),
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         deadline = time.monotonic() + 240
         while len(list(out.glob("chunks/*.chunk"))) < 3:
@@ -100,8 +115,9 @@ def test_sweep_killed_with_sigkill_resumes_to_the_uninterrupted_result(tmp_path)
     written = len(list(out.glob("chunks/*.chunk")))
     assert 3 <= written < total
 
-    resumed = mc.sweep(demo_fn, SPACE, design, _worker.SWEEP_N, _worker.KEY,
-                       chunk_size=_worker.SWEEP_CHUNK, out=out, resume=True)
+    resumed = mc.sweep(
+        demo_fn, SPACE, design, _worker.SWEEP_N, _worker.KEY, chunk_size=_worker.SWEEP_CHUNK, out=out, resume=True
+    )
     assert resumed.chunks_loaded == written and resumed.chunks_computed == total - written
     assert not resumed.rejected_chunks
     uninterrupted = mc.sweep(demo_fn, SPACE, design, _worker.SWEEP_N, _worker.KEY, chunk_size=4_000)

@@ -81,10 +81,15 @@ def _sketch_counts(sketch, x):
 @pytest.mark.parametrize("sketch", [mc.QuantileSketch(), mc.QuantileSketch(1e-2, 1e-6, 1e6)])
 def test_sketch_quantiles_respect_the_stated_bound(sketch):
     rng = np.random.default_rng(2)
-    x = np.concatenate([
-        rng.lognormal(0.0, 2.0, 400_000), -rng.lognormal(1.0, 1.0, 300_000),
-        rng.normal(0.0, 1e-10, 100_000), np.zeros(50_000), rng.uniform(-5, 5, 150_000),
-    ])
+    x = np.concatenate(
+        [
+            rng.lognormal(0.0, 2.0, 400_000),
+            -rng.lognormal(1.0, 1.0, 300_000),
+            rng.normal(0.0, 1e-10, 100_000),
+            np.zeros(50_000),
+            rng.uniform(-5, 5, 150_000),
+        ]
+    )
     counts = _sketch_counts(sketch, x)
     assert counts.sum() == x.size
     qs = np.array([0.0, 1e-4, 0.001, 0.01, 0.05, 0.25, 0.3, 0.5, 0.75, 0.95, 0.99, 0.999, 1.0])
@@ -92,8 +97,7 @@ def test_sketch_quantiles_respect_the_stated_bound(sketch):
     xs = np.sort(x)
     exact = xs[np.maximum(1, np.ceil(qs * x.size)).astype(int) - 1]
     np.testing.assert_array_equal(exact, np.quantile(x, qs, method="inverted_cdf"))
-    bound = np.where(np.abs(exact) <= sketch.min_abs, sketch.min_abs,
-                     sketch.rel_accuracy * np.abs(exact) * (1 + 1e-12))
+    bound = np.where(np.abs(exact) <= sketch.min_abs, sketch.min_abs, sketch.rel_accuracy * np.abs(exact) * (1 + 1e-12))
     assert np.all(np.abs(est - exact) <= bound), np.abs(est - exact) / bound
     assert np.all(np.abs(est - exact) <= mc.quantile_error_bound(sketch, est))
     # the bound is tight-ish: the relative accuracy is actually used
@@ -111,9 +115,14 @@ def test_sketch_beyond_its_range_reports_the_exact_extremes():
     assert np.isinf(mc.quantile_error_bound(sketch, est[2]))
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    ({"rel_accuracy": 0.0}, "rel_accuracy"), ({"min_abs": -1.0}, "min_abs"), ({"max_abs": 1e-12}, "max_abs"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"rel_accuracy": 0.0}, "rel_accuracy"),
+        ({"min_abs": -1.0}, "min_abs"),
+        ({"max_abs": 1e-12}, "max_abs"),
+    ],
+)
 def test_sketch_rejects_bad_layouts(kwargs, match):
     with pytest.raises(ValueError, match=match):
         mc.QuantileSketch(**kwargs)
@@ -198,23 +207,27 @@ def test_moments_merged_over_any_partition_equal_the_pooled_moments(case):
     acc = _PointAccumulator([Leaf("x", (), "numeric")], sketch)
     for c in chunks:
         values = np.concatenate(c)
-        acc.add({
-            "runs": np.int64(len(values)),
-            "count/x": np.array([len(p) for p in c]),
-            "mean/x": np.array([_summary(p).mean for p in c]),
-            "m2/x": np.array([_summary(p).m2 for p in c]),
-            "nonfinite/x": np.int64(0),
-            "min/x": np.min(values, initial=np.inf),
-            "max/x": np.max(values, initial=-np.inf),
-            "hist/x": np.bincount(np.asarray(_bucket(sketch, values)), minlength=sketch.n_bins),
-        })
+        acc.add(
+            {
+                "runs": np.int64(len(values)),
+                "count/x": np.array([len(p) for p in c]),
+                "mean/x": np.array([_summary(p).mean for p in c]),
+                "m2/x": np.array([_summary(p).m2 for p in c]),
+                "nonfinite/x": np.int64(0),
+                "min/x": np.min(values, initial=np.inf),
+                "max/x": np.max(values, initial=-np.inf),
+                "hist/x": np.bincount(np.asarray(_bucket(sketch, values)), minlength=sketch.n_bins),
+            }
+        )
     runs, out = acc.stats()
     st_x = out["x"]
     assert runs == n and int(st_x.count) == n
     assert float(st_x.minimum) == x.min() and float(st_x.maximum) == x.max()
     assert abs(float(st_x.moments.mean) - mean) <= tol_mean
     assert abs(float(st_x.moments.m2) - m2) <= tol_m2
-    np.testing.assert_array_equal(st_x.bucket_counts, np.bincount(np.asarray(_bucket(sketch, x)), minlength=sketch.n_bins))
+    np.testing.assert_array_equal(
+        st_x.bucket_counts, np.bincount(np.asarray(_bucket(sketch, x)), minlength=sketch.n_bins)
+    )
 
 
 def _bucket(sketch: mc.QuantileSketch, x: np.ndarray) -> np.ndarray:
@@ -243,8 +256,11 @@ def _spread_values(draw):
 
 
 @PROPERTY
-@given(_spread_values(), st.lists(st.floats(0.0, 1.0), min_size=1, max_size=5),
-       st.sampled_from([mc.QuantileSketch(1e-3, 1e-6, 1e6), mc.QuantileSketch(5e-2, 1e-3, 1e3)]))
+@given(
+    _spread_values(),
+    st.lists(st.floats(0.0, 1.0), min_size=1, max_size=5),
+    st.sampled_from([mc.QuantileSketch(1e-3, 1e-6, 1e6), mc.QuantileSketch(5e-2, 1e-3, 1e3)]),
+)
 @example(np.arange(1.0, 11.0), [0.1, 0.3, 0.7, 0.9, 1.0], mc.QuantileSketch(5e-2, 1e-3, 1e3))
 def test_sketch_quantile_meets_its_stated_bound_on_random_data(x, qs, sketch):
     """Module docstring of ``sketch``: for the order statistic ``x₍ᵣ₎``, ``r = max(1, ⌈qN⌉)`` (NumPy's

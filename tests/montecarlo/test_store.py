@@ -39,12 +39,12 @@ def test_corrupt_and_truncated_chunks_are_recomputed_never_merged(tmp_path):
     chunks = sorted((out / "chunks").glob("*.chunk"))
     assert len(chunks) == 6
     data = chunks[1].read_bytes()
-    chunks[1].write_bytes(data[: len(data) // 2])                       # truncated
+    chunks[1].write_bytes(data[: len(data) // 2])  # truncated
     flipped = bytearray(chunks[3].read_bytes())
     flipped[-10] ^= 0x40
-    chunks[3].write_bytes(bytes(flipped))                                # one bit flipped
-    chunks[4].write_bytes(b"garbage")                                    # not a chunk at all
-    os.remove(chunks[5])                                                 # missing
+    chunks[3].write_bytes(bytes(flipped))  # one bit flipped
+    chunks[4].write_bytes(b"garbage")  # not a chunk at all
+    os.remove(chunks[5])  # missing
     (out / "chunks" / f".{chunks[0].name}.tmp-12345").write_bytes(b"half-written")  # a crash's leftover
 
     resumed = _run(out, resume=True)
@@ -113,8 +113,17 @@ V2 = '{"y": p["gain"] * p["a"] - jax.random.normal(key)}'  # same name, signatur
 
 
 def _edited_sweep(fn, out=None, **kw):
-    return mc.sweep(fn, EDITED_SPACE, mc.grid({"gain": (1.0, 2.0, 2)}), EDITED_N, 5,
-                    block_size=EDITED_BLOCK, chunk_size=EDITED_CHUNK, out=out, **kw)
+    return mc.sweep(
+        fn,
+        EDITED_SPACE,
+        mc.grid({"gain": (1.0, 2.0, 2)}),
+        EDITED_N,
+        5,
+        block_size=EDITED_BLOCK,
+        chunk_size=EDITED_CHUNK,
+        out=out,
+        **kw,
+    )
 
 
 def test_resume_after_the_per_run_function_changed_is_refused_naming_the_change(tmp_path):
@@ -125,8 +134,11 @@ def test_resume_after_the_per_run_function_changed_is_refused_naming_the_change(
     edited = _metric_from_source(V2)
     assert edited.__module__ + "." + edited.__qualname__ == "study_metrics.metric"
     for resume in (True, False):
-        with pytest.raises(ValueError, match=r"per-run computation changed since the chunks in .*sweep "
-                                             r"were written \(computation hash [0-9a-f]{12} → [0-9a-f]{12}\)"):
+        with pytest.raises(
+            ValueError,
+            match=r"per-run computation changed since the chunks in .*sweep "
+            r"were written \(computation hash [0-9a-f]{12} → [0-9a-f]{12}\)",
+        ):
             _edited_sweep(edited, out, resume=resume)
     assert _snapshot(out) == before  # nothing merged, nothing written
 

@@ -33,6 +33,5 @@ def test_tune_raises_the_same_error():
 
 
 def test_one_finite_point_is_enough():
-    res = pso(lambda x: jnp.where(x[0] < 0.5, jnp.nan, jnp.sum(x)), jnp.zeros(2), jnp.ones(2),
-              n_particles=8, n_iters=2)
+    res = pso(lambda x: jnp.where(x[0] < 0.5, jnp.nan, jnp.sum(x)), jnp.zeros(2), jnp.ones(2), n_particles=8, n_iters=2)
     assert 0.5 <= float(res.x[0]) and res.loss == pytest.approx(float(jnp.sum(res.x)))

@@ -35,8 +35,13 @@ def test_losses_and_gradients_agree(gains, jax_value_and_grad):
 def test_gradient_tuner_and_ipopt_reach_the_same_optimum():
     ip = ipopt_tune(PROBLEM, np.array([1.0, 1.0, 0.1]), tol=1e-12)
     assert "Solve_Succeeded" in ip.message
-    ours = tune(PROBLEM.loss, jnp.array([1.0, 1.0, 0.1]), steps=100, gtol=1e-10,
-                optimizer=optax.lbfgs(linesearch=optax.scale_by_backtracking_linesearch(20)))
+    ours = tune(
+        PROBLEM.loss,
+        jnp.array([1.0, 1.0, 0.1]),
+        steps=100,
+        gtol=1e-10,
+        optimizer=optax.lbfgs(linesearch=optax.scale_by_backtracking_linesearch(20)),
+    )
     assert ours.mode == "forward"
     np.testing.assert_allclose(np.asarray(ours.params), ip.x, rtol=1e-6)
     assert ours.loss == pytest.approx(ip.loss, rel=1e-12)

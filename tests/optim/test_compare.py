@@ -16,11 +16,14 @@ def test_compare_records_budgets_and_equal_budget_losses():
     loss = lambda x: jnp.sum((x - 0.3) ** 2)  # noqa: E731
     lo, hi = -np.ones(2), np.ones(2)
     finished = []
-    comp = compare({
-        "gradient": lambda: tune(loss, jnp.zeros(2), optimizer=optax.adam(0.05), steps=100),
-        "pso": lambda: pso(loss, lo, hi, n_particles=10, n_iters=30, key=jax.random.PRNGKey(1)),
-        "random": lambda: random_search(loss, lo, hi, n=500, batch_size=100),
-    }, on_done=finished.append)
+    comp = compare(
+        {
+            "gradient": lambda: tune(loss, jnp.zeros(2), optimizer=optax.adam(0.05), steps=100),
+            "pso": lambda: pso(loss, lo, hi, n_particles=10, n_iters=30, key=jax.random.PRNGKey(1)),
+            "random": lambda: random_search(loss, lo, hi, n=500, batch_size=100),
+        },
+        on_done=finished.append,
+    )
     assert finished == ["gradient", "pso", "random"]
     rows = {r["tuner"]: r for r in comp.rows}
     assert [rows[k]["sims"] for k in ("gradient", "pso", "random")] == [100, 300, 500]

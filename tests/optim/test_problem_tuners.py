@@ -12,12 +12,15 @@ from optim import compare, gradient_tuner, grid_search, pso, random_search, robu
 
 # minimum at kp = 2, ki = 0.3 (log-scaled), breakpoints (0.4, 1.0): every coordinate kind once
 TARGET = {"kp": 2.0, "ki": 0.3, "e": np.array([0.4, 1.0])}
-SPACE = ParamSpace(kp=Param(lo=0.0, hi=5.0, init=1.0), ki=Param(lo=0.01, hi=10.0, init=1.0, log=True),
-                   e=Sorted(lo=0.1, hi=1.0, init=(0.5, 0.8)))
+SPACE = ParamSpace(
+    kp=Param(lo=0.0, hi=5.0, init=1.0),
+    ki=Param(lo=0.01, hi=10.0, init=1.0, log=True),
+    e=Sorted(lo=0.1, hi=1.0, init=(0.5, 0.8)),
+)
 
 
 def _loss(p, draw, key):
-    return ((p["kp"] - 2.0) ** 2 + jnp.log(p["ki"] / 0.3) ** 2 + jnp.sum((p["e"] - jnp.asarray([0.4, 1.0])) ** 2))
+    return (p["kp"] - 2.0) ** 2 + jnp.log(p["ki"] / 0.3) ** 2 + jnp.sum((p["e"] - jnp.asarray([0.4, 1.0])) ** 2)
 
 
 PROBLEM = Problem.from_loss("bowl", SPACE, _loss)
@@ -92,8 +95,9 @@ def test_compare_gives_each_standard_tuner_the_same_budget():
 
 
 def test_a_problem_with_scenarios_counts_every_scenario_as_a_simulation():
-    pb = Problem.from_loss("shifted", SPACE, lambda p, d, k: (p["kp"] - d["c"]) ** 2,
-                           scenarios={"c": jnp.asarray([1.0, 2.0, 3.0])})
+    pb = Problem.from_loss(
+        "shifted", SPACE, lambda p, d, k: (p["kp"] - d["c"]) ** 2, scenarios={"c": jnp.asarray([1.0, 2.0, 3.0])}
+    )
     assert pb.sims_per_eval == 3
     res = tune(pb, optimizer=optax.adam(0.1), steps=10)
     assert res.n_sims == 30

@@ -23,9 +23,13 @@ def _pyswarms_runs(objective, half_width):
     for seed in range(N_SEEDS):
         np.random.seed(seed)
         opt = ps.single.GlobalBestPSO(
-            N_PARTICLES, D, options={"c1": 1.5, "c2": 1.5, "w": 0.9}, bounds=(lo, hi),
+            N_PARTICLES,
+            D,
+            options={"c1": 1.5, "c2": 1.5, "w": 0.9},
+            bounds=(lo, hi),
             oh_strategy={"w": "lin_variation"},  # 0.9 → 0.4, pyswarms' default end value
-            bh_strategy="reflective", velocity_clamp=(-0.5 * (hi - lo)[0], 0.5 * (hi - lo)[0]),
+            bh_strategy="reflective",
+            velocity_clamp=(-0.5 * (hi - lo)[0], 0.5 * (hi - lo)[0]),
         )
         out.append(opt.optimize(objective, N_ITERS, verbose=False)[0])
     return np.array(out)
@@ -42,9 +46,24 @@ def test_final_loss_distribution_no_worse_than_pyswarms(name, half_width):
     np.testing.assert_allclose(jax.vmap(ours_fn)(jnp.asarray(x)), theirs_fn(x), rtol=1e-12)
 
     lo, hi = -half_width * np.ones(D), half_width * np.ones(D)
-    ours = np.array([pso(ours_fn, lo, hi, n_particles=N_PARTICLES, n_iters=N_ITERS, key=jax.random.PRNGKey(s),
-                         inertia=(0.9, 0.4), c1=1.5, c2=1.5, bounds="reflect", velocity_clamp=0.5).loss
-                     for s in range(N_SEEDS)])
+    ours = np.array(
+        [
+            pso(
+                ours_fn,
+                lo,
+                hi,
+                n_particles=N_PARTICLES,
+                n_iters=N_ITERS,
+                key=jax.random.PRNGKey(s),
+                inertia=(0.9, 0.4),
+                c1=1.5,
+                c2=1.5,
+                bounds="reflect",
+                velocity_clamp=0.5,
+            ).loss
+            for s in range(N_SEEDS)
+        ]
+    )
     theirs = _pyswarms_runs(theirs_fn, half_width)
     # one-sided Mann–Whitney: is ours stochastically larger (worse)?  Fail at the 1 % level.
     p_worse = scipy.stats.mannwhitneyu(ours, theirs, alternative="greater").pvalue
@@ -102,8 +121,16 @@ def test_one_vectorised_evaluation_per_iteration_and_accounting():
         traces.append(1)  # runs at trace time only
         return jnp.where(x[0] > 0.5, jnp.nan, jnp.sum((x - 0.2) ** 2))  # NaN on part of the box
 
-    res = pso(loss, [-1.0, -1.0], [1.0, 1.0], n_particles=20, n_iters=40, key=jax.random.PRNGKey(0),
-              topology="ring", sims_per_eval=3)
+    res = pso(
+        loss,
+        [-1.0, -1.0],
+        [1.0, 1.0],
+        n_particles=20,
+        n_iters=40,
+        key=jax.random.PRNGKey(0),
+        topology="ring",
+        sims_per_eval=3,
+    )
     assert len(traces) == 1  # the swarm loss is traced once: one vmap per iteration
     assert res.n_sims == 20 * 40 * 3 and res.history.sims[-1] == res.n_sims
     assert np.all(np.diff(res.history.best_loss) <= 0) and np.all(np.diff(res.history.wall_s) >= 0)

@@ -157,8 +157,11 @@ def test_simplex_bijection_matches_closed_form():
 
 def test_apply_invert_over_pytrees_with_prefixes_and_none():
     reparams = {"gains": Positive(), "breaks": SortedBreakpoints(min_gap=0.1), "free": None}
-    x = {"gains": {"kp": jnp.array(2.0), "ki": jnp.array([0.5, 3.0])},
-         "breaks": jnp.array([0.3, 0.6, 1.5]), "free": jnp.array([-4.0, 7.0])}
+    x = {
+        "gains": {"kp": jnp.array(2.0), "ki": jnp.array([0.5, 3.0])},
+        "breaks": jnp.array([0.3, 0.6, 1.5]),
+        "free": jnp.array([-4.0, 7.0]),
+    }
     u = invert(reparams, x)
     np.testing.assert_allclose(u["free"], x["free"])
     back = apply(reparams, u)

@@ -13,8 +13,9 @@ from optim.robust import cvar, mean, robust_loss, worst_case
 def test_cvar_equals_the_rockafellar_uryasev_minimum(alpha):
     losses = np.random.default_rng(7).gamma(2.0, 1.5, size=50)
     ru = lambda t: t + np.mean(np.maximum(losses - t, 0.0)) / (1 - alpha)  # noqa: E731
-    oracle = scipy.optimize.minimize_scalar(ru, bounds=(losses.min() - 1, losses.max() + 1),
-                                            method="bounded", options={"xatol": 1e-12}).fun
+    oracle = scipy.optimize.minimize_scalar(
+        ru, bounds=(losses.min() - 1, losses.max() + 1), method="bounded", options={"xatol": 1e-12}
+    ).fun
     assert float(cvar(jnp.asarray(losses), alpha)) == pytest.approx(oracle, rel=1e-8)
 
 

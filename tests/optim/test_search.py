@@ -30,8 +30,15 @@ def test_grid_search_equals_brute_force(points_per_dim, batch_size):
 
 def test_random_search_is_uniform_in_the_box_and_keeps_the_best():
     # best of 1000 uniform points in [−1, 1]³ on the sphere: P(min |x|² ≥ 0.09) ≈ 7e-7
-    res = random_search(lambda x: jnp.sum(x**2), -np.ones(3), np.ones(3), n=1000, batch_size=128,
-                        key=jax.random.PRNGKey(4), sims_per_eval=2)
+    res = random_search(
+        lambda x: jnp.sum(x**2),
+        -np.ones(3),
+        np.ones(3),
+        n=1000,
+        batch_size=128,
+        key=jax.random.PRNGKey(4),
+        sims_per_eval=2,
+    )
     assert res.loss < 0.09 and res.loss == pytest.approx(float(jnp.sum(res.x**2)))
     assert res.n_sims == 2000 and res.history.sims[-1] == 2000 and len(res.history.sims) == 8
     # points fill the box: the max of |x_i| over the best of a far-off target is near the corner

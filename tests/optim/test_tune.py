@@ -62,8 +62,15 @@ def test_constrained_toy_augmented_lagrangian_hits_the_kkt_point():
     f = lambda z: (z[0] - 2) ** 2 + (z[1] - 1) ** 2  # noqa: E731
     g = lambda z: z[0] + z[1] - 1  # noqa: E731
     opt = optax.adam(optax.exponential_decay(0.05, 500, 0.1))
-    al = tune(f, jnp.zeros(2), optimizer=opt, steps=1500, constraints=g,
-              constraint_method="augmented_lagrangian", penalty_weight=100.0)
+    al = tune(
+        f,
+        jnp.zeros(2),
+        optimizer=opt,
+        steps=1500,
+        constraints=g,
+        constraint_method="augmented_lagrangian",
+        penalty_weight=100.0,
+    )
     np.testing.assert_allclose(al.params, [1.0, 0.0], atol=2e-6)
     assert al.loss == pytest.approx(2.0, abs=1e-5)
     assert al.constraint_violation <= 1e-6
@@ -78,8 +85,7 @@ def test_constrained_toy_augmented_lagrangian_hits_the_kkt_point():
 
 def test_bounded_rosenbrock_with_lbfgs_and_positive_reparam():
     rosen = lambda p: (1 - p[0]) ** 2 + 100 * (p[1] - p[0] ** 2) ** 2  # noqa: E731
-    res = tune(rosen, jnp.array([0.3, 2.0]), optimizer=optax.lbfgs(), steps=200, reparam=Positive(),
-               gtol=1e-12)
+    res = tune(rosen, jnp.array([0.3, 2.0]), optimizer=optax.lbfgs(), steps=200, reparam=Positive(), gtol=1e-12)
     np.testing.assert_allclose(res.params, [1.0, 1.0], atol=1e-7)
     assert res.n_sims > res.n_steps  # line-search trials are counted
 
@@ -88,8 +94,16 @@ def test_multistart_finds_the_global_minimum_of_a_double_well():
     # minima near x = −1.04 (global) and x = +0.96 (local); a single start at 1.2 stays local
     well = lambda x: (x[0] ** 2 - 1) ** 2 + 0.3 * x[0]  # noqa: E731
     one = tune(well, jnp.array([1.2]), optimizer=optax.adam(0.05), steps=300)
-    many = tune(well, jnp.array([1.2]), optimizer=optax.adam(0.05), steps=300, n_starts=8,
-                key=jax.random.PRNGKey(3), init_spread=1.5, sims_per_eval=5)
+    many = tune(
+        well,
+        jnp.array([1.2]),
+        optimizer=optax.adam(0.05),
+        steps=300,
+        n_starts=8,
+        key=jax.random.PRNGKey(3),
+        init_spread=1.5,
+        sims_per_eval=5,
+    )
     roots = np.roots([4, 0, -4, 0.3])  # stationary points: 4x³ − 4x + 0.3 = 0
     x_glob, x_loc = roots.real.min(), roots.real.max()
     assert float(one.params[0]) == pytest.approx(x_loc, abs=1e-4)
@@ -155,8 +169,7 @@ def test_robust_objectives_reach_their_known_minimisers():
     s = jnp.array([0.0, 1.0, 2.0, 7.0])
     per_sample = lambda x, si: (x[0] - si) ** 2  # noqa: E731
     opt = optax.adam(optax.exponential_decay(0.2, 400, 0.05))
-    res_mean = tune(robust_loss(per_sample, s, mean), jnp.zeros(1), optimizer=opt, steps=800,
-                    sims_per_eval=4)
+    res_mean = tune(robust_loss(per_sample, s, mean), jnp.zeros(1), optimizer=opt, steps=800, sims_per_eval=4)
     assert float(res_mean.params[0]) == pytest.approx(2.5, abs=1e-6)  # the sample mean
     assert res_mean.n_sims == 800 * 4
     res_worst = tune(robust_loss(per_sample, s, worst_case), jnp.zeros(1), optimizer=opt, steps=800)

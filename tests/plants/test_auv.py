@@ -16,8 +16,16 @@ def _random_spd(key, n=6):
 
 def _conservative(params):
     """Damping and restoring off."""
-    return auv.AUVParams(M_R=params.M_R, M_A=params.M_A, d1=jnp.zeros(6), d2=jnp.zeros(6),
-                         weight=0.0, buoyancy=0.0, r_g=params.r_g, r_b=params.r_b)
+    return auv.AUVParams(
+        M_R=params.M_R,
+        M_A=params.M_A,
+        d1=jnp.zeros(6),
+        d2=jnp.zeros(6),
+        weight=0.0,
+        buoyancy=0.0,
+        r_g=params.r_g,
+        r_b=params.r_b,
+    )
 
 
 def test_paper_values_and_deviation():
@@ -42,12 +50,13 @@ def test_rigid_body_forces_match_newton_euler():
         inertia = np.asarray(p.inertia)
         force = 170.0 * (nu_dot[:3] + np.cross(w, v))
         moment = inertia @ nu_dot[3:] + np.cross(w, inertia @ w)
-        np.testing.assert_allclose(auv.rigid_body_forces(p, nu, nu_dot), np.concatenate([force, moment]),
-                                   rtol=1e-12, atol=1e-10)
+        np.testing.assert_allclose(
+            auv.rigid_body_forces(p, nu, nu_dot), np.concatenate([force, moment]), rtol=1e-12, atol=1e-10
+        )
 
 
 def test_coriolis_skew_symmetric_for_any_spd_mass():
-    for i, k in enumerate(jax.random.split(jax.random.PRNGKey(0), 5)):
+    for k in jax.random.split(jax.random.PRNGKey(0), 5):
         k1, k2 = jax.random.split(k)
         m = _random_spd(k1)
         nu = jax.random.normal(k2, (6,))

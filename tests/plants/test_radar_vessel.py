@@ -54,7 +54,9 @@ def test_plots_sit_at_the_centre_of_the_6m_by_0p03deg_resolution_cell():
     np.testing.assert_allclose(r / 6.0, np.round(r / 6.0), atol=1e-9)
     np.testing.assert_allclose(b / PAPER_BEARING_RESOLUTION, np.round(b / PAPER_BEARING_RESOLUTION), atol=1e-7)
     r_true, b_true = np.hypot(p[:, 0], p[:, 1]), np.arctan2(p[:, 1], p[:, 0])
-    assert np.all(np.abs(r - r_true) <= 3.0 + 1e-9) and np.all(np.abs(b - b_true) <= PAPER_BEARING_RESOLUTION / 2 + 1e-12)
+    assert np.all(np.abs(r - r_true) <= 3.0 + 1e-9) and np.all(
+        np.abs(b - b_true) <= PAPER_BEARING_RESOLUTION / 2 + 1e-12
+    )
 
 
 def test_converted_plot_covariance_matches_sampling_and_closed_form():

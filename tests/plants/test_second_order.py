@@ -15,10 +15,13 @@ def test_paper_defaults():
     assert (ap.K, ap.T) == (2.0, 0.1)
 
 
-@pytest.mark.parametrize("make, num, den", [
-    (static_plant, [2.0], [0.05, 0.6, 1.0]),
-    (astatic_plant, [2.0], [0.1, 1.0, 0.0]),
-])
+@pytest.mark.parametrize(
+    "make, num, den",
+    [
+        (static_plant, [2.0], [0.05, 0.6, 1.0]),
+        (astatic_plant, [2.0], [0.1, 1.0, 0.0]),
+    ],
+)
 def test_open_loop_step_response_matches_scipy(make, num, den):
     plant = make()
     u = jnp.array([1.0])
@@ -27,9 +30,15 @@ def test_open_loop_step_response_matches_scipy(make, num, den):
     np.testing.assert_allclose(xs[:, 0], y_ref, atol=1e-9)
 
 
-@pytest.mark.parametrize("kwargs, name", [
-    ({"T1": -0.1}, "T1"), ({"T2": float("nan")}, "T2"), ({"T1": 0.0}, "T1"), ({"K": float("inf")}, "K"),
-])
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        ({"T1": -0.1}, "T1"),
+        ({"T2": float("nan")}, "T2"),
+        ({"T1": 0.0}, "T1"),
+        ({"K": float("inf")}, "K"),
+    ],
+)
 def test_static_plant_rejects_bad_parameters(kwargs, name):
     with pytest.raises(ValueError, match=f"^{name}:"):
         static_plant(**kwargs)

@@ -51,8 +51,11 @@ def lagrangian(q, qd):
 @jax.jit
 def joint_torques(q, qd, qdd):
     dl_dqd = jax.grad(lagrangian, argnums=1)
-    return (jax.jacfwd(dl_dqd, argnums=1)(q, qd) @ qdd + jax.jacfwd(dl_dqd, argnums=0)(q, qd) @ qd
-            - jax.grad(lagrangian, argnums=0)(q, qd))
+    return (
+        jax.jacfwd(dl_dqd, argnums=1)(q, qd) @ qdd
+        + jax.jacfwd(dl_dqd, argnums=0)(q, qd) @ qd
+        - jax.grad(lagrangian, argnums=0)(q, qd)
+    )
 
 
 @pytest.mark.parametrize("t, q2, dq2, ddq2", [(0.3, 0.2, 0.7, -1.3), (1.7, -0.9, -0.4, 2.0), (4.2, 1.1, 0.0, 0.5)])
@@ -93,8 +96,12 @@ def test_reduced_model_is_an_exact_identity_along_any_motion():
         z, y = sd.reduced_state(P, x, t), sd.output(P, x)
         r1, r2 = model.known(model.params, t, y, u, z[1:])
         d = sd.fault_torque(P, x, t) / sd.total_inertia(P, t)
-        rhs = jnp.concatenate([jnp.reshape(model.F1 * z[0] + model.F2 @ z[1:] + r1 + model.D1 * d, (1,)),
-                               model.F3 * z[0] + model.F4 @ z[1:] + r2 + model.D2 * d])
+        rhs = jnp.concatenate(
+            [
+                jnp.reshape(model.F1 * z[0] + model.F2 @ z[1:] + r1 + model.D1 * d, (1,)),
+                model.F3 * z[0] + model.F4 @ z[1:] + r2 + model.D2 * d,
+            ]
+        )
         np.testing.assert_allclose(zdot, rhs, rtol=1e-10, atol=1e-10)
 
 

@@ -63,8 +63,13 @@ def test_jacfwd_linearisation_matches_closed_form_partials():
     np.testing.assert_array_equal(np.asarray(lin.c), np.eye(7)[:2])
     # and against central differences of the smooth part
     h = 1e-6
-    fd = np.stack([(np.asarray(dynamics(P, x + h * e, u, 0.0)) - np.asarray(dynamics(P, x - h * e, u, 0.0))) / (2 * h)
-                   for e in np.eye(7)[[0, 4, 5, 6]]], axis=1)
+    fd = np.stack(
+        [
+            (np.asarray(dynamics(P, x + h * e, u, 0.0)) - np.asarray(dynamics(P, x - h * e, u, 0.0))) / (2 * h)
+            for e in np.eye(7)[[0, 4, 5, 6]]
+        ],
+        axis=1,
+    )
     np.testing.assert_allclose(a[:, [0, 4, 5, 6]], fd, rtol=1e-7, atol=1e-9)
 
 

@@ -62,8 +62,9 @@ def test_robust_loss_is_the_mean_over_explicit_draws(problem):
     assert robust.sims_per_eval == n
     draws = problem.sample(jax.random.PRNGKey(3), n)
     assert draws["K"].shape == (n,) and np.all(np.abs(draws["K"] / 2.0 - 1) <= 0.2)
-    expected = np.mean([float(PIDTuning(K=float(draws["K"][i]), T1=float(draws["T1"][i]), t_final=1.0).loss(GAINS))
-                        for i in range(n)])
+    expected = np.mean(
+        [float(PIDTuning(K=float(draws["K"][i]), T1=float(draws["T1"][i]), t_final=1.0).loss(GAINS)) for i in range(n)]
+    )
     assert float(robust.jitted.loss({"gains": GAINS})) == pytest.approx(expected, rel=1e-12)
     worst = problem.robust(n, jax.random.PRNGKey(3), reducer=lambda v: jnp.max(v))
     totals = robust.scenario_totals({"gains": GAINS})
@@ -100,8 +101,13 @@ def test_sample_is_the_monte_carlo_engines_draw_and_mc_of_a_problem_matches_robu
 
 def test_from_loss_constraints_and_the_search_loss():
     space = ParamSpace(x=Param(lo=-2.0, hi=2.0, init=(0.5, 0.5)))
-    pb = Problem.from_loss("quad", space, lambda p, d, k: jnp.sum((p["x"] - 1.0) ** 2),
-                           constraints=lambda p: p["x"][0] - 0.5, penalty_weight=10.0)
+    pb = Problem.from_loss(
+        "quad",
+        space,
+        lambda p, d, k: jnp.sum((p["x"] - 1.0) ** 2),
+        constraints=lambda p: p["x"][0] - 0.5,
+        penalty_weight=10.0,
+    )
     z = jnp.asarray([1.0, 1.0])
     assert float(pb.loss(space.from_search(z))) == 0.0
     assert float(pb.search_loss(z)) == pytest.approx(0.5 * 10.0 * 0.25, rel=1e-14)

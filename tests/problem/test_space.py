@@ -59,24 +59,29 @@ def test_reparam_maps_unconstrained_steps_inside_the_declaration():
 
 
 def test_flat_values_and_labels():
-    space = ParamSpace(gains=Param(lo=(0, 0, 0), hi=(20, 20, 2), init=(10, 10, 1), labels=("kp", "ki", "kd")),
-                       e=Sorted(lo=0.1, hi=1.0, init=(0.5, 0.9)))
+    space = ParamSpace(
+        gains=Param(lo=(0, 0, 0), hi=(20, 20, 2), init=(10, 10, 1), labels=("kp", "ki", "kd")),
+        e=Sorted(lo=0.1, hi=1.0, init=(0.5, 0.9)),
+    )
     assert space.names == ("kp", "ki", "kd", "Δe[0]", "Δe[1]")
     assert space.flat(space.init) == {"kp": 10.0, "ki": 10.0, "kd": 1.0, "e[0]": 0.5, "e[1]": 0.9}
 
 
-@pytest.mark.parametrize("decl, match", [
-    (Param(lo=0.0, hi=1.0, init=1.0), r"x.init: must lie strictly inside"),
-    (Param(lo=1.0, hi=1.0, init=1.0), r"x: need lo < hi"),
-    (Param(lo=0.0, hi=10.0, init=1.0, log=True), r"x.lo: a log-scaled parameter needs lo > 0"),
-    (Param(lo=0.0, hi=float("inf"), init=1.0), r"x.hi: must be finite"),
-    (Param(lo=(0, 0), hi=(1, 1, 1), init=(0.5, 0.5)), r"x: lo \(2,\) and hi \(3,\) do not broadcast"),
-    (Param(lo=0.0, hi=1.0, init=(0.5, 0.5), labels=("a",)), r"x.labels: need 2 labels"),
-    (Sorted(lo=0.1, hi=1.0, init=(0.5, 0.4)), r"x.init: must increase from origin"),
-    (Sorted(lo=0.1, hi=1.0, init=(0.5, 2.0)), r"x.init: its increments \[0.5, 1.5\] must lie in"),
-    (Sorted(lo=0.01, hi=1.0, init=(0.5, 0.9), min_gap=0.05), r"x.lo: the increments' lower bounds"),
-    (Sorted(lo=0.1, hi=1.0, init=0.5), r"x.init: a Sorted parameter is a vector"),
-])
+@pytest.mark.parametrize(
+    "decl, match",
+    [
+        (Param(lo=0.0, hi=1.0, init=1.0), r"x.init: must lie strictly inside"),
+        (Param(lo=1.0, hi=1.0, init=1.0), r"x: need lo < hi"),
+        (Param(lo=0.0, hi=10.0, init=1.0, log=True), r"x.lo: a log-scaled parameter needs lo > 0"),
+        (Param(lo=0.0, hi=float("inf"), init=1.0), r"x.hi: must be finite"),
+        (Param(lo=(0, 0), hi=(1, 1, 1), init=(0.5, 0.5)), r"x: lo \(2,\) and hi \(3,\) do not broadcast"),
+        (Param(lo=0.0, hi=1.0, init=(0.5, 0.5), labels=("a",)), r"x.labels: need 2 labels"),
+        (Sorted(lo=0.1, hi=1.0, init=(0.5, 0.4)), r"x.init: must increase from origin"),
+        (Sorted(lo=0.1, hi=1.0, init=(0.5, 2.0)), r"x.init: its increments \[0.5, 1.5\] must lie in"),
+        (Sorted(lo=0.01, hi=1.0, init=(0.5, 0.9), min_gap=0.05), r"x.lo: the increments' lower bounds"),
+        (Sorted(lo=0.1, hi=1.0, init=0.5), r"x.init: a Sorted parameter is a vector"),
+    ],
+)
 def test_bad_declarations_are_refused_naming_the_parameter(decl, match):
     with pytest.raises(ValueError, match=match):
         ParamSpace(x=decl)

@@ -6,8 +6,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxsim.problem.trms import N_THETA, Scenario, TRMSTuning
 from jaxsim.core.rollout import Timing, simulate
+from jaxsim.problem.trms import N_THETA, Scenario, TRMSTuning
 
 SHORT = Scenario(t_final=3.0, pitch_period=2.0, yaw_period=3.0, yaw_delay=0.5)
 

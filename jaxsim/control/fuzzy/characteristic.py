@@ -90,8 +90,7 @@ def validate_three_section(a: Any, b: Any, c: Any, d: Any) -> None:
         raise ValueError(f"d: the saturation level must not be below b (d ≥ b), got b={b!r}, d={d!r}")
 
 
-def three_section(a: Any, b: Any, c: Any, d: Any, *, form: str = "exact",
-                  temperature: Any = 0.01) -> ThreeSection:
+def three_section(a: Any, b: Any, c: Any, d: Any, *, form: str = "exact", temperature: Any = 0.01) -> ThreeSection:
     """A validated :class:`ThreeSection`; the paper's static-plant FC is ``three_section(0.75, 0.3, 1.2, 1.0)``.
 
     Raises:

@@ -60,8 +60,9 @@ def fuzzy_pid_init(p: FuzzyPIDParams, r0: jax.Array, y0: jax.Array) -> FuzzyPIDS
     return FuzzyPIDState(integral=zero, deriv=zero, prev=e0)
 
 
-def fuzzy_pid_step(p: FuzzyPIDParams, s: FuzzyPIDState, r: jax.Array, y: jax.Array,
-                   ts: jax.Array, t: Any = None) -> tuple[FuzzyPIDState, jax.Array]:
+def fuzzy_pid_step(
+    p: FuzzyPIDParams, s: FuzzyPIDState, r: jax.Array, y: jax.Array, ts: jax.Array, t: Any = None
+) -> tuple[FuzzyPIDState, jax.Array]:
     """One controller tick of period ``ts`` (s) at tick time ``t`` (s; unused); returns the new
     state and the (saturated) output."""
     e = r - y
@@ -74,8 +75,16 @@ def fuzzy_pid_step(p: FuzzyPIDParams, s: FuzzyPIDState, r: jax.Array, y: jax.Arr
     return FuzzyPIDState(s.integral + ts * fi, deriv, e), u
 
 
-def fuzzy_pid(p: Any = None, i: Any = None, d: Any = None, *, tf: Any = 0.0, u_min: Any = -jnp.inf,
-              u_max: Any = jnp.inf, anti_windup: str = "clamping") -> Controller:
+def fuzzy_pid(
+    p: Any = None,
+    i: Any = None,
+    d: Any = None,
+    *,
+    tf: Any = 0.0,
+    u_min: Any = -jnp.inf,
+    u_max: Any = jnp.inf,
+    anti_windup: str = "clamping",
+) -> Controller:
     """A fuzzy P/PI/PD/PID :class:`~jaxsim.core.system.Controller` from channel characteristics.
 
     Raises:
@@ -93,6 +102,7 @@ def fuzzy_pid(p: Any = None, i: Any = None, d: Any = None, *, tf: Any = 0.0, u_m
     lo, hi = np.asarray(u_min, float), np.asarray(u_max, float)
     if np.any(np.isnan(lo)) or np.any(np.isnan(hi)) or np.any(lo >= hi):
         raise ValueError(f"u_min/u_max: need u_min < u_max, got u_min={u_min!r}, u_max={u_max!r}")
-    params = FuzzyPIDParams(p, i, d, jnp.asarray(tf, float), jnp.asarray(u_min, float),
-                            jnp.asarray(u_max, float), anti_windup)
+    params = FuzzyPIDParams(
+        p, i, d, jnp.asarray(tf, float), jnp.asarray(u_min, float), jnp.asarray(u_max, float), anti_windup
+    )
     return Controller(params, fuzzy_pid_init, fuzzy_pid_step, name="fuzzy_pid")

@@ -122,8 +122,7 @@ def _interp_in_interval(x, x0, x1, y0, y1):
     return jnp.where(x == x1, y1, v)
 
 
-def unimodal_cuts(grid: jax.Array, term_mf: jax.Array,
-                  levels: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
+def unimodal_cuts(grid: jax.Array, term_mf: jax.Array, levels: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
     """Sorted cut points ``q`` ``(2T,)`` of unimodal sampled terms, the output set's value there and
     the grid interval ``k`` holding each (``grid[k] ≤ q ≤ grid[k + 1]``).
 
@@ -151,8 +150,7 @@ def unimodal_cuts(grid: jax.Array, term_mf: jax.Array,
     return q, jnp.max(jnp.minimum(alpha, values), axis=0), k
 
 
-def clipped_points_unimodal(grid: jax.Array, term_mf: jax.Array,
-                            levels: jax.Array) -> tuple[jax.Array, jax.Array]:
+def clipped_points_unimodal(grid: jax.Array, term_mf: jax.Array, levels: jax.Array) -> tuple[jax.Array, jax.Array]:
     """:func:`clipped_points` for unimodal sampled terms (every kind but piecewise-linear).
 
     Same point multiset (hence the same centroid, bisector and maxima) as :func:`clipped_points`,
@@ -172,8 +170,9 @@ def clipped_points_unimodal(grid: jax.Array, term_mf: jax.Array,
     return jnp.where(is_cut, q[j], grid[i]), jnp.where(is_cut, mu_q[j], mu_g[i])
 
 
-def centroid_clipped_unimodal(grid: jax.Array, term_mf: jax.Array, levels: jax.Array,
-                              fallback: Any = None) -> jax.Array:
+def centroid_clipped_unimodal(
+    grid: jax.Array, term_mf: jax.Array, levels: jax.Array, fallback: Any = None
+) -> jax.Array:
     """``centroid(*clipped_points_unimodal(...))`` without building the merged points.
 
     Start from the trapezoids on the grid; inserting the cut ``p`` (value ``v``) between its
@@ -278,8 +277,9 @@ DEFUZZIFIERS: dict[str, Callable[..., jax.Array]] = {
 IMPLICATIONS = ("min", "product")
 
 
-def implied_set(implication: str, grid: jax.Array, term_mf: jax.Array, levels: jax.Array,
-                unimodal: bool = False) -> tuple[jax.Array, jax.Array]:
+def implied_set(
+    implication: str, grid: jax.Array, term_mf: jax.Array, levels: jax.Array, unimodal: bool = False
+) -> tuple[jax.Array, jax.Array]:
     """The output set as points: ``"min"`` → cut points inserted (the faster unimodal variant when
     every term is unimodal), ``"product"`` → the grid."""
     if implication == "product":

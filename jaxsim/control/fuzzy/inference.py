@@ -39,7 +39,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxsim.control.fuzzy.defuzzify import DEFUZZIFIERS, IMPLICATIONS, centroid_clipped_unimodal, implied_set
-from jaxsim.control.fuzzy.membership import Terms, terms as make_terms
+from jaxsim.control.fuzzy.membership import Terms
+from jaxsim.control.fuzzy.membership import terms as make_terms
 from jaxsim.control.fuzzy.norms import check_snorm, check_tnorm, snorm_reduce, tnorm_reduce
 from jaxsim.control.fuzzy.rules import RuleBase
 from jaxsim.core.pytree import pytree_dataclass, static_field
@@ -215,8 +216,9 @@ def _as_terms(name: str, t: Any) -> Terms:
     raise ValueError(f"{name}: expected Terms or a (kind, params) pair, got {type(t).__name__}")
 
 
-def _build(inputs: Sequence[Any], output: Any, rules: RuleBase, weights: Any, and_norm: str,
-           or_norm: str, accumulation: str) -> FuzzySystem:
+def _build(
+    inputs: Sequence[Any], output: Any, rules: RuleBase, weights: Any, and_norm: str, or_norm: str, accumulation: str
+) -> FuzzySystem:
     if not isinstance(rules, RuleBase):
         raise ValueError(f"rules: expected a RuleBase (see fuzzy.rule_base), got {type(rules).__name__}")
     if len(inputs) == 0:
@@ -235,9 +237,19 @@ def _build(inputs: Sequence[Any], output: Any, rules: RuleBase, weights: Any, an
     return FuzzySystem(ins, output, w, rules, and_norm, or_norm, accumulation)
 
 
-def mamdani(inputs: Sequence[Any], output_grid: Any, output_terms: Any, rules: RuleBase, *,
-            implication: str = "min", defuzzifier: str = "centroid", weights: Any = None,
-            and_norm: str = "min", or_norm: str = "max", accumulation: str = "max") -> FuzzySystem:
+def mamdani(
+    inputs: Sequence[Any],
+    output_grid: Any,
+    output_terms: Any,
+    rules: RuleBase,
+    *,
+    implication: str = "min",
+    defuzzifier: str = "centroid",
+    weights: Any = None,
+    and_norm: str = "min",
+    or_norm: str = "max",
+    accumulation: str = "max",
+) -> FuzzySystem:
     """A Mamdani system (``implication="product"`` gives Larsen's).
 
     Args:
@@ -265,14 +277,20 @@ def mamdani(inputs: Sequence[Any], output_grid: Any, output_terms: Any, rules: R
     return _build(inputs, out, rules, weights, and_norm, or_norm, accumulation)
 
 
-def larsen(inputs: Sequence[Any], output_grid: Any, output_terms: Any, rules: RuleBase,
-           **kwargs: Any) -> FuzzySystem:
+def larsen(inputs: Sequence[Any], output_grid: Any, output_terms: Any, rules: RuleBase, **kwargs: Any) -> FuzzySystem:
     """A Larsen system: :func:`mamdani` with product implication."""
     return mamdani(inputs, output_grid, output_terms, rules, implication="product", **kwargs)
 
 
-def sugeno(inputs: Sequence[Any], coefficients: Any, rules: RuleBase, *, weights: Any = None,
-           and_norm: str = "min", or_norm: str = "max") -> FuzzySystem:
+def sugeno(
+    inputs: Sequence[Any],
+    coefficients: Any,
+    rules: RuleBase,
+    *,
+    weights: Any = None,
+    and_norm: str = "min",
+    or_norm: str = "max",
+) -> FuzzySystem:
     """A Sugeno system: ``coefficients`` ``(M,)``/``(M, 1)`` (zero order) or ``(M, n + 1)`` (first order)."""
     c = jnp.asarray(coefficients, float)
     c = c[:, None] if c.ndim == 1 else c
@@ -283,8 +301,15 @@ def sugeno(inputs: Sequence[Any], coefficients: Any, rules: RuleBase, *, weights
     return _build(inputs, SugenoOutput(c), rules, weights, and_norm, or_norm, "max")
 
 
-def tsukamoto(inputs: Sequence[Any], output_terms: Any, rules: RuleBase, *, weights: Any = None,
-              and_norm: str = "min", or_norm: str = "max") -> FuzzySystem:
+def tsukamoto(
+    inputs: Sequence[Any],
+    output_terms: Any,
+    rules: RuleBase,
+    *,
+    weights: Any = None,
+    and_norm: str = "min",
+    or_norm: str = "max",
+) -> FuzzySystem:
     """A Tsukamoto system with strictly monotone output terms (``piecewise_linear`` or ``sigmoid``)."""
     t = _as_terms("output_terms", output_terms)
     if t.kind not in ("piecewise_linear", "sigmoid"):
@@ -294,7 +319,7 @@ def tsukamoto(inputs: Sequence[Any], output_terms: Any, rules: RuleBase, *, weig
         if t.kind == "sigmoid" and np.any(p[:, 1] == 0):
             raise ValueError("output_terms: a sigmoid with slope 0 is not invertible")
         if t.kind == "piecewise_linear":
-            ys = p[:, p.shape[1] // 2:]
+            ys = p[:, p.shape[1] // 2 :]
             d = np.diff(ys, axis=1)
             if not np.all((d > 0).all(axis=1) | (d < 0).all(axis=1)):
                 raise ValueError("output_terms: Tsukamoto terms must be strictly monotone (y strictly up or down)")

@@ -48,9 +48,7 @@ class RuleBase:
         """Raise ``ValueError`` if an index is out of range for the given variable sizes."""
         ant = self.antecedent_array()
         if len(n_input_terms) != self.n_inputs:
-            raise ValueError(
-                f"inputs: the rule base has {self.n_inputs} inputs, the system {len(n_input_terms)}"
-            )
+            raise ValueError(f"inputs: the rule base has {self.n_inputs} inputs, the system {len(n_input_terms)}")
         for i, n_terms in enumerate(n_input_terms):
             bad = np.flatnonzero((ant[:, i] < -1) | (ant[:, i] >= n_terms))
             if bad.size:
@@ -97,9 +95,7 @@ def rule_base(antecedents: Any, consequents: Any, connective: str = "and") -> Ru
     if ant.shape[1] < 1:
         raise ValueError(f"antecedents: need at least one input column, got shape {ant.shape}")
     if ant.shape[0] != cons.shape[0]:
-        raise ValueError(
-            f"consequents: {cons.shape[0]} consequents for {ant.shape[0]} rules (antecedent rows)"
-        )
+        raise ValueError(f"consequents: {cons.shape[0]} consequents for {ant.shape[0]} rules (antecedent rows)")
     if np.any(ant < -1):
         raise ValueError(f"antecedents: indices must be ≥ −1 (−1 = input not used), got min {ant.min()}")
     if np.any(cons < 0):

@@ -84,7 +84,7 @@ def fit_three_section(e: Any, u: Any, *, n_candidates: int = 48) -> ThreeSection
     cand = np.linspace(lo, hi, n_candidates + 2)[1:-1]
     best = (np.inf, None)
     for i, a in enumerate(cand):
-        for c in cand[i + 1:]:
+        for c in cand[i + 1 :]:
             _, mse = _levels(x, y, a, c)
             if mse < best[0]:
                 best = (mse, (a, c))
@@ -95,9 +95,10 @@ def fit_three_section(e: Any, u: Any, *, n_candidates: int = 48) -> ThreeSection
             return np.inf
         return _levels(x, y, a, c)[1]
 
-    res = scipy.optimize.minimize(objective, np.array(best[1]), method="Nelder-Mead",
-                                  options={"xatol": 1e-12, "fatol": 1e-16, "maxiter": 4000})
-    a, c = (res.x if res.fun <= best[0] else np.array(best[1]))
+    res = scipy.optimize.minimize(
+        objective, np.array(best[1]), method="Nelder-Mead", options={"xatol": 1e-12, "fatol": 1e-16, "maxiter": 4000}
+    )
+    a, c = res.x if res.fun <= best[0] else np.array(best[1])
     (b, d), mse = _levels(x, y, a, c)
     f = lambda v: jnp.asarray(float(v))  # noqa: E731
     return ThreeSectionFit(ThreeSection(f(a), f(b), f(c), f(d)), float(np.sqrt(mse)))

@@ -52,8 +52,9 @@ def odd_sugeno(e_breaks: Any, u_levels: Any) -> FuzzySystem:
     return sugeno([terms], consts, _identity_rules(terms.params.shape[0]))
 
 
-def odd_mamdani(e_breaks: Any, u_levels: Any, width: Any, *, u_range: float, n_grid: int = 201,
-                defuzzifier: str = "centroid") -> FuzzySystem:
+def odd_mamdani(
+    e_breaks: Any, u_levels: Any, width: Any, *, u_range: float, n_grid: int = 201, defuzzifier: str = "centroid"
+) -> FuzzySystem:
     """Mamdani P controller: output triangles of half-width ``width`` at ``0, ±q_k`` on a grid of
     ``n_grid`` points over ``[−u_range, u_range]``."""
     q = jnp.asarray(u_levels, float)

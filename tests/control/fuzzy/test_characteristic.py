@@ -89,15 +89,25 @@ def test_fit_recovers_a_three_section_characteristic():
 
 def test_static_characteristic_of_a_single_input_mamdani_and_its_fit():
     # a symmetric five-term controller with terms moved away from the centre (the paper's Fig. 2)
-    inputs = [("trapezoidal", [[-9, -9, -1.4, -0.7], [-1.4, -0.7, -0.7, 0.0], [-0.7, 0.0, 0.0, 0.7],
-                               [0.0, 0.7, 0.7, 1.4], [0.7, 1.4, 9, 9]])]
+    inputs = [
+        (
+            "trapezoidal",
+            [
+                [-9, -9, -1.4, -0.7],
+                [-1.4, -0.7, -0.7, 0.0],
+                [-0.7, 0.0, 0.0, 0.7],
+                [0.0, 0.7, 0.7, 1.4],
+                [0.7, 1.4, 9, 9],
+            ],
+        )
+    ]
     out = ("triangular", [[-1.5, -1.0, -0.5], [-1.0, -0.3, 0.0], [-0.3, 0.0, 0.3], [0.0, 0.3, 1.0], [0.5, 1.0, 1.5]])
     fis = fz.mamdani(inputs, np.linspace(-1.5, 1.5, 301), out, fz.rule_base([[0], [1], [2], [3], [4]], range(5)))
     e = jnp.linspace(-2.0, 2.0, 201)
     u = np.asarray(jax.jit(fz.static_characteristic)(fis, e))
     ev = jax.jit(fz.evaluate)
     for k in (13, 57, 100, 161):
-        assert u[k] == pytest.approx(float(ev(fis, e[k:k + 1])), abs=1e-14)
+        assert u[k] == pytest.approx(float(ev(fis, e[k : k + 1])), abs=1e-14)
     np.testing.assert_allclose(u[::-1], -u, atol=1e-12)  # odd
     fit = fz.fit_three_section(e, u)
     a, b, c, d = fit.abcd

@@ -17,31 +17,43 @@ from jaxsim.plants.second_order import astatic_plant, static_plant
 TIMING = Timing(t_final=3.0, dt=2e-3)
 
 
-@pytest.mark.parametrize("gains", [dict(kp=0.7), dict(kp=0.7, ki=1.6), dict(kp=0.7, kd=0.05, tf=0.02),
-                                   dict(kp=0.9, ki=1.2, kd=0.04, tf=0.03)])
+@pytest.mark.parametrize(
+    "gains",
+    [dict(kp=0.7), dict(kp=0.7, ki=1.6), dict(kp=0.7, kd=0.05, tf=0.02), dict(kp=0.9, ki=1.2, kd=0.04, tf=0.03)],
+)
 def test_linear_channels_reproduce_the_pid(gains):
     lin = lambda k: fz.linear(k) if k else None  # noqa: E731
-    fuzzy = fz.fuzzy_pid(p=lin(gains.get("kp")), i=lin(gains.get("ki")), d=lin(gains.get("kd")),
-                         tf=gains.get("tf", 0.0), anti_windup="none")
+    fuzzy = fz.fuzzy_pid(
+        p=lin(gains.get("kp")),
+        i=lin(gains.get("ki")),
+        d=lin(gains.get("kd")),
+        tf=gains.get("tf", 0.0),
+        anti_windup="none",
+    )
     ref = pid(anti_windup="none", **gains)
     refs = Sum((Step(1.0), Ramp(0.2)))
-    run = jax.jit(lambda c: simulate(ClosedLoop(static_plant(), c, reference=refs, disturbance=Step(0.3)),
-                                     jnp.zeros(2), TIMING).y)
+    run = jax.jit(
+        lambda c: simulate(ClosedLoop(static_plant(), c, reference=refs, disturbance=Step(0.3)), jnp.zeros(2), TIMING).y
+    )
     np.testing.assert_allclose(run(fuzzy), run(ref), rtol=0, atol=1e-12)
 
 
 def test_saturation_and_clamping_match_the_pid():
     fuzzy = fz.fuzzy_pid(p=fz.linear(2.0), i=fz.linear(3.0), u_min=-0.5, u_max=0.8)
     ref = pid(kp=2.0, ki=3.0, u_min=-0.5, u_max=0.8, anti_windup="clamping")
-    run = jax.jit(lambda c: simulate(ClosedLoop(astatic_plant(), c, reference=Step(1.0), disturbance=Step(0.6)),
-                                     jnp.zeros(2), TIMING).u)
+    run = jax.jit(
+        lambda c: (
+            simulate(ClosedLoop(astatic_plant(), c, reference=Step(1.0), disturbance=Step(0.6)), jnp.zeros(2), TIMING).u
+        )
+    )
     np.testing.assert_allclose(run(fuzzy), run(ref), rtol=0, atol=1e-12)
 
 
 def test_fuzzy_output_never_exceeds_the_saturation_level():
     fc = fz.three_section(0.75, 0.3, 1.2, 1.0)
     tr = jax.jit(lambda c: simulate(ClosedLoop(static_plant(), c, reference=Step(3.0)), jnp.zeros(2), TIMING))(
-        fz.fuzzy_pid(p=fc))
+        fz.fuzzy_pid(p=fc)
+    )
     assert float(jnp.max(jnp.abs(tr.u))) == pytest.approx(1.0, abs=1e-15)  # e(0) = 3 > c: u = d
 
 

@@ -10,19 +10,34 @@ from jaxsim.control import fuzzy as fz
 
 
 def _mamdani(defuzzifier="centroid", implication="min", out_kind="triangular"):
-    inputs = [("gaussian", [[-1.0, 0.5], [0.0, 0.4], [1.0, 0.6]]),
-              ("triangular", [[-2.0, -1.0, 0.2], [-0.9, 0.1, 1.1], [0.0, 1.0, 2.0]])]
-    out = {"triangular": [[-2.0, -1.0, 0.1], [-1.1, 0.05, 1.0], [0.0, 1.0, 2.1]],
-           "bell": [[0.6, 2.0, -1.0], [0.5, 1.5, 0.0], [0.7, 2.5, 1.0]]}[out_kind]
+    inputs = [
+        ("gaussian", [[-1.0, 0.5], [0.0, 0.4], [1.0, 0.6]]),
+        ("triangular", [[-2.0, -1.0, 0.2], [-0.9, 0.1, 1.1], [0.0, 1.0, 2.0]]),
+    ]
+    out = {
+        "triangular": [[-2.0, -1.0, 0.1], [-1.1, 0.05, 1.0], [0.0, 1.0, 2.1]],
+        "bell": [[0.6, 2.0, -1.0], [0.5, 1.5, 0.0], [0.7, 2.5, 1.0]],
+    }[out_kind]
     rules = fz.grid_rule_base([[0, 0, 1], [0, 1, 2], [1, 2, 2]])
-    return fz.mamdani(inputs, np.linspace(-2.5, 2.5, 51), (out_kind, out), rules,
-                      defuzzifier=defuzzifier, implication=implication, weights=np.full(9, 0.9))
+    return fz.mamdani(
+        inputs,
+        np.linspace(-2.5, 2.5, 51),
+        (out_kind, out),
+        rules,
+        defuzzifier=defuzzifier,
+        implication=implication,
+        weights=np.full(9, 0.9),
+    )
 
 
 def _sugeno():
     inputs = [("bell", [[0.8, 2.0, -1.0], [0.8, 2.0, 1.0]]), ("sigmoid", [[0.0, 3.0], [0.5, -2.0]])]
-    return fz.sugeno(inputs, [[0.1, 1.0, -0.5], [0.5, -0.3, 0.8], [-0.4, 0.2, 0.3]],
-                     fz.rule_base([[0, 0], [0, 1], [1, 0], [1, 1]], [0, 1, 2, 0]), and_norm="product")
+    return fz.sugeno(
+        inputs,
+        [[0.1, 1.0, -0.5], [0.5, -0.3, 0.8], [-0.4, 0.2, 0.3]],
+        fz.rule_base([[0, 0], [0, 1], [1, 0], [1, 1]], [0, 1, 2, 0]),
+        and_norm="product",
+    )
 
 
 def _tsukamoto():
@@ -64,10 +79,12 @@ def test_gradient_wrt_every_parameter_equals_central_differences(case):
     for p_i, (p, g) in enumerate(zip(params, grads)):
         flat = np.asarray(p).ravel()
         for j in range(flat.size):
+
             def shifted(delta):
                 q = list(params)
                 q[p_i] = jnp.asarray(flat.copy()).at[j].add(delta).reshape(p.shape)
                 return float(f_jit(q))
+
             up, mid, down = shifted(h), float(f_jit(params)), shifted(-h)
             fwd, bwd = (up - mid) / h, (mid - down) / h
             if abs(fwd - bwd) > 1e-4 * max(1.0, abs(fwd)):
@@ -89,7 +106,9 @@ def test_vmap_over_system_parameters_equals_a_loop():
     batch = fz.FuzzySystem(
         (fz.Terms(in0, "gaussian"), batch.inputs[1]),
         fz.MamdaniOutput(batch.output.grid, fz.Terms(out, "triangular")),
-        batch.weights, base.rules)
+        batch.weights,
+        base.rules,
+    )
     x = jnp.asarray([0.21, -0.43])
     batched = jax.jit(jax.vmap(fz.evaluate, in_axes=(0, None)))(batch, x)
     for k in range(n):
@@ -130,8 +149,7 @@ def test_rule_base_validation_names_the_argument():
     with pytest.raises(ValueError, match="output_grid"):
         fz.mamdani(inputs, [0.0, 0.0, 1.0], ("triangular", [[0, 1, 2]]), fz.rule_base([[0, 0]], [0]))
     with pytest.raises(ValueError, match="defuzzifier"):
-        fz.mamdani(inputs, [0.0, 1.0], ("triangular", [[0, 1, 2]]), fz.rule_base([[0, 0]], [0]),
-                   defuzzifier="median")
+        fz.mamdani(inputs, [0.0, 1.0], ("triangular", [[0, 1, 2]]), fz.rule_base([[0, 0]], [0]), defuzzifier="median")
 
 
 def test_norms_and_their_reductions():
@@ -141,7 +159,8 @@ def test_norms_and_their_reductions():
     assert float(fz.snorm_reduce("max", a)) == 0.7
     # probabilistic sum folds pairwise: S(S(a, b), c)
     assert float(fz.snorm_reduce("probor", a)) == pytest.approx(
-        float(fz.snorm("probor", fz.snorm("probor", 0.2, 0.7), 0.5)))
+        float(fz.snorm("probor", fz.snorm("probor", 0.2, 0.7), 0.5))
+    )
     assert float(fz.tnorm_reduce("min", jnp.zeros((0,)))) == 1.0  # identities on empty axes
     assert float(fz.snorm_reduce("probor", jnp.zeros((0,)))) == 0.0
     with pytest.raises(ValueError, match="kind"):

@@ -7,7 +7,6 @@ piecewise-linear function: the same semantics as ours on the same grid.
 """
 
 import warnings
-
 from functools import partial
 
 import jax
@@ -27,7 +26,7 @@ SK_MF = {
     "trapezoidal": lambda x, p: fuzz.trapmf(x, p),
     "gaussian": lambda x, p: fuzz.gaussmf(x, p[0], p[1]),
     "bell": lambda x, p: fuzz.gbellmf(x, p[0], p[1], p[2]),
-    "piecewise_linear": lambda x, p: np.interp(x, p[: p.size // 2], p[p.size // 2:]),
+    "piecewise_linear": lambda x, p: np.interp(x, p[: p.size // 2], p[p.size // 2 :]),
 }
 
 
@@ -55,8 +54,12 @@ def _term_params(kind, n_terms, rng, lo=-1.6, hi=1.6):
 
 def _random_system(seed):
     rng = np.random.default_rng(seed)
-    in_kinds = [["triangular", "gaussian"], ["trapezoidal", "bell"], ["gaussian", "triangular"],
-                ["bell", "trapezoidal"]][seed % 4]
+    in_kinds = [
+        ["triangular", "gaussian"],
+        ["trapezoidal", "bell"],
+        ["gaussian", "triangular"],
+        ["bell", "trapezoidal"],
+    ][seed % 4]
     out_kind = ["triangular", "gaussian", "trapezoidal", "piecewise_linear"][seed % 4]
     n_terms = [int(rng.integers(3, 5)), int(rng.integers(3, 5))]
     inputs = [(k, _term_params(k, n, rng)) for k, n in zip(in_kinds, n_terms)]
@@ -119,8 +122,10 @@ def _skfuzzy_bisector_is_ill_conditioned(xs, mu):
 def test_mamdani_equals_skfuzzy_on_random_systems(seed):
     inputs, output, grid, rules, options = _random_system(seed)
     rng = np.random.default_rng(100 + seed)
-    ours = {name: jax.jit(partial(fz.evaluate, fz.mamdani(inputs, grid, output, rules, defuzzifier=name, **options)))
-            for name in ("centroid", "bisector")}
+    ours = {
+        name: jax.jit(partial(fz.evaluate, fz.mamdani(inputs, grid, output, rules, defuzzifier=name, **options)))
+        for name in ("centroid", "bisector")
+    }
     output_set = jax.jit(partial(fz.output_set, fz.mamdani(inputs, grid, output, rules, **options)))
     sim, universes, con = _skfuzzy_system(inputs, output, grid, rules, options, "centroid")
     compared = 0
@@ -153,9 +158,11 @@ def _all_defuzzified(grid, term_mf, levels):
     general = dfz.clipped_points(grid, term_mf, levels)
     merged = dfz.clipped_points_unimodal(grid, term_mf, levels)
     names = ("centroid", "bisector", "mom", "som", "lom")
-    return (dfz.centroid_clipped_unimodal(grid, term_mf, levels),
-            jnp.stack([dfz.DEFUZZIFIERS[n](*general) for n in names]),
-            jnp.stack([dfz.DEFUZZIFIERS[n](*merged) for n in names]))
+    return (
+        dfz.centroid_clipped_unimodal(grid, term_mf, levels),
+        jnp.stack([dfz.DEFUZZIFIERS[n](*general) for n in names]),
+        jnp.stack([dfz.DEFUZZIFIERS[n](*merged) for n in names]),
+    )
 
 
 def test_fast_unimodal_centroid_equals_the_general_construction():
@@ -174,8 +181,12 @@ def test_maximum_defuzzifiers_on_a_clipped_trapezoid():
     a, b, c, d = -0.83, -0.21, 0.37, 1.12
     grid = np.linspace(-2.0, 2.0, 41)
     fis_of = lambda name: fz.mamdani(  # noqa: E731
-        [("triangular", [[-1.0, 0.0, 1.0]])], grid, ("trapezoidal", [[a, b, c, d]]),
-        fz.rule_base([[0]], [0]), defuzzifier=name)
+        [("triangular", [[-1.0, 0.0, 1.0]])],
+        grid,
+        ("trapezoidal", [[a, b, c, d]]),
+        fz.rule_base([[0]], [0]),
+        defuzzifier=name,
+    )
     x = 0.35  # membership 0.65 in the input triangle
     alpha = 0.65
     lo, hi = a + alpha * (b - a), d - alpha * (d - c)
@@ -206,8 +217,12 @@ def test_larsen_and_maximum_defuzzifiers_equal_skfuzzy_defuzz():
 
 
 def test_empty_output_set_returns_the_grid_middle():
-    fis = fz.mamdani([("triangular", [[-1.0, 0.0, 1.0]])], np.linspace(-1.0, 3.0, 21),
-                     ("triangular", [[0.0, 1.0, 2.0]]), fz.rule_base([[0]], [0]))
+    fis = fz.mamdani(
+        [("triangular", [[-1.0, 0.0, 1.0]])],
+        np.linspace(-1.0, 3.0, 21),
+        ("triangular", [[0.0, 1.0, 2.0]]),
+        fz.rule_base([[0]], [0]),
+    )
     assert float(jax.jit(fz.evaluate)(fis, jnp.asarray([5.0]))) == pytest.approx(1.0)
 
 
@@ -228,8 +243,9 @@ def test_fast_centroid_when_cut_points_fall_on_grid_nodes():
     c = np.linspace(-1.0, 1.0, 7)
     tri = np.stack([c - 1 / 3, c, c + 1 / 3], axis=1)
     table = np.clip(np.add.outer(np.arange(7), np.arange(7)) - 3, 0, 6)
-    fis = fz.mamdani([("triangular", tri)] * 2, np.linspace(-1.5, 1.5, 101), ("triangular", tri),
-                     fz.grid_rule_base(table))
+    fis = fz.mamdani(
+        [("triangular", tri)] * 2, np.linspace(-1.5, 1.5, 101), ("triangular", tri), fz.grid_rule_base(table)
+    )
     xs = np.stack(np.meshgrid(np.linspace(-1, 1, 61), np.linspace(-1, 1, 61)), -1).reshape(-1, 2)
     # the same system with piecewise-linear output terms takes the general (per-interval sort) path
     p = np.asarray(fis.output.terms.params)

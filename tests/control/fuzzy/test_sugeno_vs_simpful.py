@@ -33,8 +33,12 @@ def _params(kind, n, rng):
 
 def _random_sugeno(seed):
     rng = np.random.default_rng(seed)
-    kinds = [("triangular", "gaussian"), ("trapezoidal", "sigmoid"), ("gaussian", "triangular"),
-             ("sigmoid", "trapezoidal")][seed % 4]
+    kinds = [
+        ("triangular", "gaussian"),
+        ("trapezoidal", "sigmoid"),
+        ("gaussian", "triangular"),
+        ("sigmoid", "trapezoidal"),
+    ][seed % 4]
     n_terms = [3, 4]
     inputs = [(k, _params(k, n, rng)) for k, n in zip(kinds, n_terms)]
     n_out = 4
@@ -49,8 +53,9 @@ def _random_sugeno(seed):
 
 def _simpful_system(inputs, coef, rules, and_norm):
     with contextlib.redirect_stdout(io.StringIO()):
-        fs = simpful.FuzzySystem(show_banner=False, verbose=False,
-                                 operators=["AND_PRODUCT"] if and_norm == "product" else None)
+        fs = simpful.FuzzySystem(
+            show_banner=False, verbose=False, operators=["AND_PRODUCT"] if and_norm == "product" else None
+        )
         for i, (kind, params) in enumerate(inputs):
             sets = [simpful.FuzzySet(function=SIMPFUL_MF[kind](row), term=f"t{t}") for t, row in enumerate(params)]
             fs.add_linguistic_variable(f"x{i}", simpful.LinguisticVariable(sets, universe_of_discourse=[-3, 3]))
@@ -128,7 +133,10 @@ def _invert_numerically(terms, c, w):
 
 def test_tsukamoto_rejects_non_monotone_terms():
     with pytest.raises(ValueError, match="output_terms"):
-        fz.tsukamoto([("triangular", [[0.0, 1.0, 2.0]])], ("piecewise_linear", [[0.0, 1.0, 2.0, 0.0, 1.0, 0.0]]),
-                     fz.rule_base([[0]], [0]))
+        fz.tsukamoto(
+            [("triangular", [[0.0, 1.0, 2.0]])],
+            ("piecewise_linear", [[0.0, 1.0, 2.0, 0.0, 1.0, 0.0]]),
+            fz.rule_base([[0]], [0]),
+        )
     with pytest.raises(ValueError, match="output_terms"):
         fz.tsukamoto([("triangular", [[0.0, 1.0, 2.0]])], ("gaussian", [[0.0, 1.0]]), fz.rule_base([[0]], [0]))
