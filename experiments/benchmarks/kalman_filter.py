@@ -143,6 +143,9 @@ def time_sweep(fn, runs, chunk, steps, dtype, repeats, scales=None) -> tuple[flo
 def dynamax_fn(model: LinearGaussianSSM, per_run: bool = False):
     from dynamax.linear_gaussian_ssm.inference import lgssm_filter, make_lgssm_params
 
+    # importing dynamax sets JAX's global default matmul precision; the kernels timed beside it keep JAX's default
+    jax.config.update("jax_default_matmul_precision", None)
+
     def ll(y, s=1.0):
         params = make_lgssm_params(model.m0, model.P0, model.F, model.Q, model.H, model.R * s)
         return lgssm_filter(params, y).marginal_loglik
