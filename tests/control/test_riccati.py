@@ -12,6 +12,7 @@ Two criteria:
   worse than SciPy's.
 """
 
+import functools
 import warnings
 
 import jax
@@ -56,14 +57,21 @@ def _check_or_report(label, diff, res_ref, res, kappa_fn):
     return line
 
 
+@functools.cache
+def _ours(name: str, discrete: bool) -> np.ndarray:
+    """Our solution of a named benchmark case, solved once per case (both checks below use it)."""
+    a, b, q, r = (DAREX if discrete else CAREX)[name]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MarginalStabilityWarning)  # near-boundary cases: checked below
+        return np.asarray((solve_discrete_are if discrete else solve_continuous_are)(a, b, q, r))
+
+
 def _compare(name, a, b, q, r, discrete):
-    ours_fn = solve_discrete_are if discrete else solve_continuous_are
     ref_fn = sl.solve_discrete_are if discrete else sl.solve_continuous_are
     residual = dare_relative_residual if discrete else care_relative_residual
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sl.LinAlgWarning)
-        warnings.simplefilter("ignore", MarginalStabilityWarning)  # near-boundary cases: checked below
-        x = np.asarray(ours_fn(a, b, q, r))
+        x = _ours(name, discrete)
         try:
             x_ref = ref_fn(a, b, q, r)
         except np.linalg.LinAlgError:  # SciPy finds no solution (CAREX 19): the target test covers it
@@ -82,14 +90,10 @@ def _compare(name, a, b, q, r, discrete):
 
 def _meets_scipys_target(name, a, b, q, r, discrete):
     """Largest residual entry ≤ SciPy's target for the case (or ≤ SciPy's own where it has none)."""
-    ours_fn, ref_fn, residual = (
-        (solve_discrete_are, sl.solve_discrete_are, scipy_dare_residual)
-        if discrete
-        else (solve_continuous_are, sl.solve_continuous_are, scipy_care_residual)
+    ref_fn, residual = (
+        (sl.solve_discrete_are, scipy_dare_residual) if discrete else (sl.solve_continuous_are, scipy_care_residual)
     )
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", MarginalStabilityWarning)
-        x = np.asarray(ours_fn(a, b, q, r))
+    x = _ours(name, discrete)
     ours = np.max(np.abs(residual(x, a, b, q, r)))
     target = SCIPY_ATOL[name]
     if target is None:  # a known failure of SciPy's: at least as good as SciPy's own solution
