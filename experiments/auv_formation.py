@@ -28,7 +28,7 @@ import optax
 
 import jaxsim.montecarlo as mc
 from experiments import figures, stages
-from experiments.runner import Claim, Study, StudyResult, assumption
+from experiments.runner import Claim, Study, StudyResult, paper_facts
 from jaxsim.core.rollout import simulate
 from jaxsim.plants import formation
 from jaxsim.problem.auv_formation import (
@@ -80,64 +80,7 @@ CLAIMS = [
     ),
 ]
 
-ASSUMPTIONS = {
-    "frames": assumption(
-        "NED (z down), zyx Euler angles, Fossen's C(ν) from M",
-        "the paper cites Fossen [25] without writing the matrices out",
-    ),
-    "deviation_sign": assumption(
-        "true = nominal + Δ (M_Δ added to the added-mass block)",
-        "the paper says the parameters 'differ by' Δ without a sign",
-    ),
-    "weight": assumption(
-        "W = B = 170 kg · 9.81 m/s², CG 0.01 m below CB",
-        "'zero buoyancy' and the 0.01 m offset are printed; which mass gives W is not",
-    ),
-    "estimator_start": assumption(
-        0.0,
-        "the camera sees the leader from t = 0; starting the zero-filled "
-        "window with the follower (t = 4 s) makes the quartic fit report "
-        "~20 m/s and the follower swing at ±11 m/s, unlike the paper's "
-        "+1.2 → −1.1 m/s (see table startup_variants)",
-    ),
-    "window_fill": assumption(
-        "zeros in FR (the target at the follower's own position)",
-        "paper: 'the array Ω is filled with zeros' before the start",
-    ),
-    "attitude_reference": assumption(
-        "roll 0, pitch and yaw along the target point's velocity, weighted "
-        "by a smoothstep of its horizontal speed (0 below 0.2, 1 above 0.5 m/s)",
-        "the paper's rule 'near the target point' lost its symbol; pointing at "
-        "the target point is singular there, and the course of a slow target "
-        "point (while the window fills, under camera noise) is ill-defined",
-    ),
-    "switch": assumption(
-        "exact sign for the reproduction; tanh(s/0.05) while tuning",
-        "the paper says 'variable structure' and 'sliding mode' without a formula",
-    ),
-    "kalman_noise": assumption(
-        {"accel_psd_m2_s3": 1e-3, "meas_std_m": 0.01, "p0": (1.0, 1.0)},
-        "the paper gives no P_p(0), Q_p, R_p; R is the fit's covariance for "
-        "white camera noise meas_std, Q a white-acceleration model",
-    ),
-    "camera_noise": assumption(
-        {"pos_std_m": 0.01, "yaw_std_deg": 0.2},
-        "pose noise (no intrinsics or beacon layout in the paper); ~1 cm and "
-        "0.2° are typical of LM-PnP at 5–10 m; the reproduction uses the exact "
-        "pose like the paper's study 1",
-    ),
-    "t_final": assumption(100.0, "the figure's time axis is not readable; 100 s covers both transients"),
-    "ss_window": assumption(
-        (60.0, 100.0),
-        "after the t = 32 s transient has decayed below the bands "
-        "(Λ = 0.2 gives a 5 s time constant); earlier windows in table error_bands",
-    ),
-    "t_to_0p2m": assumption("first time ‖e‖ ≤ 0.2 m after the start", "the paper: 'reduced to 0.2 m by t = 28 s'"),
-    "tuning_loss": assumption(
-        "mean ‖e‖² + ρ·mean (τ/100 N)² over [20, 46] s, ρ = 1e-3, CVaR₀.₇₅",
-        "formation keeping through the manoeuvre with noise and deviations; no criterion in the paper",
-    ),
-}
+_, ASSUMPTIONS = paper_facts("auv_formation")
 
 
 def _fig_reproduction(tr: Any, cfg: Config) -> Any:

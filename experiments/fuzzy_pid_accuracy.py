@@ -27,7 +27,7 @@ import numpy as np
 import optax
 
 from experiments import figures, stages
-from experiments.runner import Claim, Study, StudyResult, assumption
+from experiments.runner import Claim, Study, StudyResult, paper_facts
 from jaxsim.control import fuzzy as fz
 from jaxsim.control.fuzzy_steady_state import section_domains, steady_state_error
 from jaxsim.problem.fuzzy_accuracy import (
@@ -77,39 +77,7 @@ CLAIMS = [
     ),
 ]
 
-ASSUMPTIONS = {
-    "disturbance_sign": assumption("u − f", "the sign that reproduces every number in the paper"),
-    "initial_conditions": assumption("zero", "not stated in the paper"),
-    "time_unit": assumption("s", "the paper gives no time unit"),
-    "astatic_reference": assumption(
-        "g = 1 step together with the disturbance step at t = 0",
-        "Fig. 5 applies g(t) and f 'simultaneously'; the amplitude of g is not given",
-    ),
-    "fc1_static": assumption(
-        [0.5, 0.3, 1.2, 1.0],
-        "Fig. 3 shows FC1 (larger K1) and FC2 without parameters; FC2 is taken as the paper's FC "
-        "(K1 = K_mds = 0.4) and FC1 as the same characteristic with a = 0.5 (K1 = 0.6)",
-    ),
-    "fuzzy_pi": assumption(
-        "P channel: a, c of the plant's paper FC, K1 = Kp of the maximum-stability PI, K2 = 1.5·K1; "
-        "I channel: a = 0.05, c = 0.3, K1 = Ki of the maximum-stability PI, K2 = 2·K1",
-        "the paper gives no fuzzy PI parameters (Fig. 6 is curves only); the small gains follow the "
-        "paper's rule K1 = the linear maximum-stability gain, the section gains are chosen larger",
-    ),
-    "fig6_scenario": assumption(
-        "astatic plant, g = 1 and f = 0.5 steps at t = 0", "Fig. 6 says only 'a constant disturbance'"
-    ),
-    "fig2_mamdani": assumption(
-        "five-term odd Mamdani (templates.odd_mamdani), breakpoints fitted by Adam to the paper's static-plant FC",
-        "the paper's FC membership functions, rules and defuzzification are not given (curve 1 of "
-        "Fig. 2 is unknown); this builds a Mamdani FC whose approximation (curve 2) is the paper's",
-    ),
-    "grid": assumption(
-        "g ∈ grid_g, f ∈ grid_f, K_g ∈ grid_g_slope, K_f ∈ grid_f_slope; relative error "
-        "|e_sim − e_an| / max(|e_an|, g)",
-        "covers every section (small gain, large gain, saturated) and the no-steady-state cases",
-    ),
-}
+_, ASSUMPTIONS = paper_facts("fuzzy_pid_accuracy")
 
 
 def _case_key(plant: str, f: float) -> str:

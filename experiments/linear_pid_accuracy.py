@@ -23,7 +23,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from experiments import stages
-from experiments.runner import Claim, Study, StudyResult, assumption
+from experiments.runner import Study, StudyResult, paper_facts
 from jaxsim.control.pid import PIDParams, pid, pid_transfer_function
 from jaxsim.control.stability_degree import (
     characteristic_polynomial,
@@ -71,39 +71,7 @@ class Config:
 
 
 PRESETS = {"quick": dict(t_final=10.0)}
-CLAIMS = [
-    Claim("kp_mds_static", paper=0.4, rel_tol=1e-6, source="seed 000 paper 1, §1.3: K_mds = 0.4 (static plant)"),
-    Claim("kp_mds_astatic", paper=1.25, rel_tol=1e-6, source="seed 000 paper 1, §1.3: K_mds = 1.25 (astatic plant)"),
-    Claim(
-        "max_normalised_error_sim_vs_table",
-        paper=0.0,
-        abs_tol=1e-6,
-        source="seed 000 paper 1, Tables 1–2 (symbolic steady-state errors) against the simulation",
-    ),
-    Claim(
-        "max_normalised_error_final_value_vs_table",
-        paper=0.0,
-        abs_tol=1e-9,
-        source="seed 000 paper 1, Tables 1–2 against the final-value theorem on the loop polynomials",
-    ),
-]
-
-ASSUMPTIONS = {
-    "g_slope": assumption(0.5, "Tables 1–2 are symbolic in K_g; any slope exercises the formula"),
-    "f_slope": assumption(0.2, "Tables 1–2 are symbolic in K_f; any slope exercises the formula"),
-    "derivative_filter": assumption(
-        0.05,
-        "the paper's PD has no stated filter; an ideal PD on a 2nd-order plant has an unbounded "
-        "stability degree, so D = s/(0.05 s + 1) makes the maximum-stability design well posed",
-    ),
-    "pi_pd_gains": assumption(
-        "maximum stability degree (coalesced roots)",
-        "the paper gives PI/PD gains only symbolically; they are designed by the same rule as its P gains",
-    ),
-    "disturbance_sign": assumption("u − f", "the sign that reproduces every number in the paper"),
-    "initial_conditions": assumption("zero", "not stated in the paper"),
-    "time_unit": assumption("s", "the paper gives no time unit"),
-}
+CLAIMS, ASSUMPTIONS = paper_facts("linear_pid_accuracy")
 
 
 def _plants(cfg: Config) -> dict[str, dict[str, Any]]:

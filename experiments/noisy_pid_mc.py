@@ -24,7 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxsim.montecarlo as mc
-from experiments.runner import Claim, PerRun, Study, StudyResult, assumption
+from experiments.runner import PerRun, Study, StudyResult, paper_facts
 from jaxsim.control.pid import pid
 from jaxsim.control.stability_degree import max_stability_degree
 from jaxsim.core import costs
@@ -53,29 +53,7 @@ class Config:
     seed: int = 0
 
 
-ASSUMPTIONS = {
-    "K_delta": assumption(0.2, "the papers quote ±20 % parameter spreads for robustness checks; applied to K"),
-    "T_delta": assumption(0.1, "time constants are better known than the gain; ±10 % chosen"),
-    "noise_std": assumption(0.02, "1 % of the unit set-point's steady state; not from the paper"),
-    "overshoot_limit": assumption(5.0, "a common specification, not from the paper"),
-}
-
-CLAIMS = [  # (s+4)³ = s³ + 12s² + (20 + 40kp)s + 40ki, the loop's characteristic polynomial / 0.05
-    Claim("kp_nominal", paper=0.7, rel_tol=1e-9, source="closed form: triple closed-loop root at −4"),
-    Claim("ki_nominal", paper=1.6, rel_tol=1e-9, source="closed form: triple closed-loop root at −4"),
-    Claim(
-        "engine_vs_simulate_itae_rel_diff",
-        paper=0.0,
-        abs_tol=1e-12,
-        source="simulate + metrics.itae of one noise-free rollout (independent of fold and the engine)",
-    ),
-    Claim(
-        "engine_noise_free_itae_std",
-        paper=0.0,
-        abs_tol=1e-12,
-        source="no uncertainty, no noise: every run is the same rollout",
-    ),
-]
+CLAIMS, ASSUMPTIONS = paper_facts("noisy_pid_mc")
 
 
 def nominal_gains(cfg: Config) -> dict[str, float]:

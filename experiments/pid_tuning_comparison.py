@@ -26,7 +26,7 @@ import numpy as np
 import optax
 
 from experiments import stages
-from experiments.runner import Claim, Study, StudyResult, assumption
+from experiments.runner import Study, StudyResult, paper_facts
 from jaxsim.core import costs
 from jaxsim.problem import Param, ParamSpace, Problem, Scenario
 from optim.casadi_pid import casadi_value_and_grad, ipopt_tune
@@ -54,37 +54,7 @@ class Config:
     seed: int = 0
 
 
-ASSUMPTIONS = {
-    "loss": assumption(
-        "∫ e² + ρ u² dt, ρ = 0.01, unit step, 3 s",
-        "the paper gives no tuning criterion for its linear PID; a smooth ISE with a "
-        "control-effort term has a finite interior optimum, so IPOPT is well posed",
-    ),
-    "controller_period": assumption(
-        0.01, "a 100 Hz digital PID; the paper simulates at 1e-3 without a stated controller rate"
-    ),
-    "derivative_filter": assumption(0.05, "the paper's PD has no stated filter (as in linear_pid_accuracy)"),
-    "gain_box": assumption("kp, ki ∈ [0, 20], kd ∈ [0, 2]", "wide enough to hold the optimum well inside"),
-    "budget": assumption(3200, "simulations per tuner; equal for all but IPOPT, which stops at its tolerance"),
-}
-
-CLAIMS = [  # no paper number exists for this tuning problem: the references are independent computations
-    Claim(
-        "jax_vs_casadi_loss_rel_diff",
-        paper=0.0,
-        abs_tol=1e-12,
-        source="optim.casadi_pid: the same loss rebuilt in CasADi (own RK4, own PID update)",
-    ),
-    Claim("jax_vs_casadi_grad_rel_diff", paper=0.0, abs_tol=1e-6, source="CasADi algorithmic differentiation"),
-    Claim(
-        "gap_to_ipopt_gradient_lbfgs",
-        paper=0.0,
-        abs_tol=1e-12,
-        source="IPOPT optimum of the CasADi loss (tol 1e-10)",
-        note="quasi-Newton meets the optimum",
-    ),
-    Claim("gradient_vs_ipopt_gain_rel_diff", paper=0.0, abs_tol=1e-3, source="IPOPT optimum (gains)"),
-]
+CLAIMS, ASSUMPTIONS = paper_facts("pid_tuning_comparison")
 
 
 def tuning_of(cfg: Config) -> PIDTuning:

@@ -18,23 +18,23 @@ it (``results.json["preset"]`` names the preset).  After the run, every :class:`
 ``result.metrics``: ``results.json["reproduction"]`` (and ``reproduction.csv``) has one row per claim,
 ``{metric, ours, paper, tolerance, verdict, source, note}`` with verdict ``"reproduced"``,
 ``"differs"`` or ``"not computed"`` (the run did not produce the metric, e.g. a quick preset).
-
-During the transition the runner also takes the old :class:`experiments.study.Study` (``config_cls``
-with a ``quick: bool`` field): :func:`as_study` adapts it with the preset ``quick = {"quick": True}``.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import tomllib
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from experiments.config_overrides import apply_overrides
 from experiments.study import PerRun, StudyResult, assumption
-from experiments.study import Study as LegacyStudy
 
-__all__ = ["Claim", "PerRun", "Study", "StudyResult", "as_study", "assumption", "check_claims"]
+__all__ = ["Claim", "PerRun", "Study", "StudyResult", "as_study", "assumption", "check_claims", "paper_facts"]
+
+PAPERS = Path(__file__).parent / "papers"
 
 VERDICTS = ("reproduced", "differs", "not computed")
 
@@ -114,6 +114,29 @@ def check_claims(claims: Sequence[Claim], metrics: dict[str, Any]) -> list[dict[
     return [c.row(metrics) for c in claims]
 
 
+def paper_facts(study: str, folder: Path = PAPERS) -> tuple[list[Claim], dict[str, dict[str, Any]]]:
+    """``(claims, assumptions)`` of a study from ``folder/<study>.toml``: ``[[claims]]`` tables with
+    the fields of :class:`Claim` (``band`` as a two-element array) and ``[assumptions.<name>]`` tables
+    with ``value`` and ``why`` — the paper's facts as data, beside the study's code."""
+    path = Path(folder) / f"{study}.toml"
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, tomllib.TOMLDecodeError) as err:
+        raise ValueError(f"paper facts of study {study!r}: cannot read {path}: {err}") from err
+    claims = []
+    for i, c in enumerate(data.get("claims", [])):
+        unknown = set(c) - {f.name for f in dataclasses.fields(Claim)}
+        if unknown:
+            raise ValueError(f"{path}: claims[{i}] has unknown field(s) {', '.join(sorted(unknown))}")
+        claims.append(Claim(**{**c, "band": tuple(c["band"]) if "band" in c else None}))
+    assumptions = {}
+    for name, a in data.get("assumptions", {}).items():
+        if set(a) != {"value", "why"}:
+            raise ValueError(f"{path}: assumptions.{name} must have exactly 'value' and 'why', got {sorted(a)}")
+        assumptions[name] = assumption(a["value"], a["why"])
+    return claims, assumptions
+
+
 @dataclass(frozen=True)
 class Study:
     """A study: see the module docstring.  ``per_run(config) -> PerRun`` (optional) enables
@@ -127,13 +150,12 @@ class Study:
     claims: Sequence[Claim] = ()
     assumptions: dict[str, dict[str, Any]] = field(default_factory=dict)
     per_run: Callable[[Any], PerRun] | None = None
-    legacy: bool = False  # adapted from the old Study shape (a `quick` field in the config)
 
     def __post_init__(self) -> None:
         if not dataclasses.is_dataclass(self.config):
             raise ValueError(f"study {self.name!r}: config must be a dataclass, got {self.config!r}")
         names = {f.name for f in dataclasses.fields(self.config)}
-        if "quick" in names and not self.legacy:
+        if "quick" in names:
             raise ValueError(f"study {self.name!r}: no `quick` field in the config; declare a 'quick' preset")
         if "full" in self.presets:
             raise ValueError(f"study {self.name!r}: 'full' is the config's defaults, not a preset to declare")
@@ -164,12 +186,8 @@ class Study:
         return preset, apply_overrides(config, list(overrides))
 
     def default_config(self, quick: bool = False) -> Any:
-        """The full config, or the quick preset's (compatibility with the old Study)."""
+        """The full config, or the quick preset's."""
         return self.resolve("quick" if quick and "quick" in self.presets else None)[1]
-
-    @property
-    def config_cls(self) -> type:  # the old Study's name for it
-        return self.config
 
     def finalize(self, result: StudyResult, preset: str) -> tuple[StudyResult, dict[str, Any]]:
         """The result with the study's assumptions merged in (the run's own win) and the reproduction
@@ -184,21 +202,8 @@ class Study:
         return merged, extra
 
 
-def as_study(study: Study | LegacyStudy) -> Study:
-    """A :class:`Study`; an old :class:`experiments.study.Study` is adapted (its ``quick: bool``
-    field becomes the preset ``quick = {"quick": True}``)."""
+def as_study(study: Any) -> Study:
+    """``study`` if it is a :class:`Study`; anything else (a module's ``STUDY`` of another type) is refused."""
     if isinstance(study, Study):
         return study
-    if isinstance(study, LegacyStudy):
-        names = {f.name for f in dataclasses.fields(study.config_cls)}
-        presets = {"quick": {"quick": True}} if "quick" in names else {}
-        return Study(
-            name=study.name,
-            description=study.description,
-            config=study.config_cls,
-            run=study.run,
-            presets=presets,
-            per_run=study.per_run,
-            legacy=True,
-        )
     raise ValueError(f"STUDY: expected an experiments.runner.Study, got {type(study).__name__}")

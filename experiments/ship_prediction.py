@@ -20,7 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from experiments import figures, stages
-from experiments.runner import Claim, Study, StudyResult, assumption
+from experiments.runner import Claim, Study, StudyResult, paper_facts
 from jaxsim.core.integrators import RK4, integrate
 from jaxsim.estimation import hankel_predictor as hp
 from jaxsim.plants import ship_3dof
@@ -61,30 +61,7 @@ CLAIMS = [
     Claim("lti_max_abs_error", paper=0.0, abs_tol=1e-8, source="closed-form y_k = C A^k x0 of random LTI systems"),
 ]
 
-ASSUMPTIONS = {
-    "vessel_model": assumption(
-        "linear Mariner 3-DOF (Chislett & Strøm-Tejsen 1965 derivatives, Fossen MSS mariner.m)",
-        "the paper's full nonlinear 6-DOF landing-vessel model (its ref. [31]) and its parameters are not given",
-    ),
-    "manoeuvre": assumption(
-        "rudder 15° sin(2πt/40 s) + 5° step at 20 s; +1 m/s speed command at 10 s",
-        "the paper's control signals (Fig. 4) are curves only; steps and sinusoids are 'linearisable' inputs",
-    ),
-    "rank_tol": assumption(
-        1e-8,
-        "SVD threshold of the null space (relative to σ_max) for the vessel; not stated "
-        "in the paper; tighter thresholds pick up the kinematic nonlinearity (table null_space_choice)",
-    ),
-    "lti_rank_tol": assumption(1e-10, "threshold for the exactly low-rank random LTI data (the predictor's default)"),
-    "noisy_rank": assumption(
-        "the noise-free numerical rank", "with noise nothing is exactly null; the rank is fixed to the noise-free one"
-    ),
-    "noise_std": assumption(1e-4, "the issue's level; the paper's data are noise-free"),
-    "error_measure": assumption(
-        "max |ŷ − y| over time and coordinates (m for x, y; rad for ψ)",
-        "the paper states errors 'do not exceed the 4th decimal place in all coordinates'",
-    ),
-}
+_, ASSUMPTIONS = paper_facts("ship_prediction")
 
 
 def controls(cfg: Config, t: jax.Array) -> jax.Array:

@@ -24,7 +24,7 @@ import numpy as np
 import optax
 
 from experiments import figures, stages
-from experiments.runner import Claim, Study, StudyResult, assumption
+from experiments.runner import Claim, Study, StudyResult, paper_facts
 from jaxsim.core.integrators import RK4
 from jaxsim.core.rollout import Timing, simulate
 from jaxsim.estimation import reduced_order_smo as smo
@@ -100,36 +100,7 @@ CLAIMS = [
     ),
 ]
 
-ASSUMPTIONS = {
-    "drive_equations": assumption(
-        "eq. (4.1) rebuilt as in spec §2.2 (standard drive model of the authors' group)",
-        "the display equation is lost in the extraction; the companion paper (Zuev et al., Sensors 2022, "
-        "22(1), 317) was searched for but its body text was not available, only its abstract",
-    ),
-    "arm_coupling": assumption(
-        "H* = M22(q3), h* = Ḣ*, M* = M23 q̈3 + ∂M23/∂q3 q̇3² − ½∂M11/∂q2 q̇1² + ∂V/∂q2 of an RRR arm",
-        "the coupling equations of ref. [22] are lost; derived from the Lagrangian with the paper's link "
-        "parameters (tested against an independent forward-kinematics Lagrangian)",
-    ),
-    "sensors": assumption("angle x1 and current x3", "the only set consistent with k = 2, N* = 0, M* = 2"),
-    "reduced_model": assumption("x*2 = x2/i_r + φ(t) x3, φ = −a L_m/(i_r k_ω)", "spec §2.3 [ours]"),
-    "self_tuning_device": assumption("none", "not described in the paper"),
-    "pid": assumption(
-        "U = kp e + ki ∫e + kd D, D = s/(1e-3 s + 1) e, no voltage limit",
-        "the paper gives only the gains (10, 0.5, 1); a 1 ms derivative filter tames noise",
-    ),
-    "initial_state": assumption("at rest at q2 = 0 with the holding current; observer ẑ2(0) = 0", "not stated"),
-    "sample_period": assumption(1e-5, "integration step and ε are not given; 100 kHz sampling"),
-    "width": assumption(1e-3, "ε of v_eq = e1/(|e1| + ε) is not given"),
-    "fault_bound": assumption(0.5, "β for the existence check: about twice the largest |M̃| of the scenario"),
-    "error_normalisation": assumption("max |M̃| after the fault", "the paper does not define its 0.35 %"),
-    "settle": assumption(0.05, "seconds after the onset before errors count (observer time constant ≈ 1 ms)"),
-    "noise_levels": assumption(
-        "angle 1e-9 / 1e-8 rad, current 1e-4 / 1e-3 A",
-        "the paper is noise-free; these levels show where the identification breaks",
-    ),
-    "parameter_spread": assumption(0.01, "relative std of R_m, L_m, k_ω, k_m, J, k_y in the plant; observer nominal"),
-}
+_, ASSUMPTIONS = paper_facts("smo_fault")
 
 
 def stats_row(

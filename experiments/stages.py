@@ -9,6 +9,8 @@
   library as one more tuner of :func:`tune_and_compare`);
 * :func:`gradient_tuning` — :func:`optim.tune` on one problem: the result, the per-step history
   table (loss, best loss, the evaluated parameters by coordinate name) and the loss-vs-step figure;
+* :func:`median_over_seeds` — a stochastic tuner repeated over seeds, represented by its median run,
+  every run in a per-seed table (with its best loss within a reference number of simulations);
 * :func:`merge` — stages (and extra metrics/notes) into one :class:`~experiments.study.StudyResult`.
 
 Metric names: ``loss_<tuner>``, ``sims_<tuner>``, ``wall_s_<tuner>``, ``loss_at_common_sims_<tuner>``,
@@ -32,7 +34,7 @@ import jaxsim.montecarlo as mc
 from experiments import figures
 from experiments.study import StudyResult
 from jaxsim.core.metrics import step_info
-from optim.compare import Comparison, compare, comparison_metrics
+from optim.compare import Comparison, Curve, best_within, compare, comparison_metrics
 from optim.results import History, TuneResult
 from optim.tune import tune
 
@@ -125,6 +127,41 @@ def tune_and_compare(
         comparison=comp,
         designs=designs,
     )
+
+
+def median_over_seeds(
+    run: Callable[[int], TuneResult], seeds: Sequence[int], name: str, rows: list[dict[str, Any]]
+) -> TuneResult:
+    """``run(seed)`` for every seed; returns the median run by loss (the lower one for an even count)
+    and appends one row per seed to ``rows``: ``tuner, seed, best_loss, sims, wall_s`` and the run's
+    history (for :func:`seed_rows_within`)."""
+    runs = sorted(((s, run(s)) for s in seeds), key=lambda sr: float(sr[1].loss))
+    rows += [
+        {
+            "tuner": name,
+            "seed": s,
+            "best_loss": float(r.loss),
+            "sims": int(r.n_sims),
+            "wall_s": float(r.wall_s),
+            "_r": r,
+        }
+        for s, r in sorted(runs, key=lambda sr: sr[0])
+    ]
+    return runs[(len(runs) - 1) // 2][1]
+
+
+def seed_rows_within(
+    rows: list[dict[str, Any]], sims: float, column: str = "best_loss_within_ref_sims"
+) -> list[dict[str, Any]]:
+    """:func:`median_over_seeds`'s rows with ``column`` — the best loss each run had found after
+    ``sims`` simulations — in place of the run itself."""
+
+    def within(r: TuneResult) -> float:
+        h = r.history
+        curve = Curve(*(np.asarray(v, float) for v in (h.sims, h.wall_s, h.best_loss)))
+        return best_within(curve, sims=sims)
+
+    return [{**{k: v for k, v in row.items() if k != "_r"}, column: within(row["_r"])} for row in rows]
 
 
 def responses(

@@ -1,13 +1,8 @@
-"""The pieces a study returns (:class:`StudyResult`, :func:`assumption`, :class:`PerRun`) and the
-*old* study shape (:class:`Study` with a ``quick: bool`` config field).
+"""The pieces a study returns: :class:`StudyResult`, :func:`assumption` and :class:`PerRun`.
 
-New studies use :class:`experiments.runner.Study` (config + named presets + claims + assumptions);
-the runner adapts this old shape (:func:`experiments.runner.as_study`) until every study is ported.
-
-An old study module defines ``STUDY = Study(name, description, Config, run)``; the CLI discovers it.
-A study that can be swept (``python -m experiments sweep NAME``) also passes
-``per_run=lambda config: PerRun(metric, nominal, uncertain)``: one run's metrics as a pure JAX
-function of a key and a dict of named parameters (see :class:`PerRun`).
+A study (:class:`experiments.runner.Study`) that can be swept (``python -m experiments sweep NAME``)
+passes ``per_run=lambda config: PerRun(metric, nominal, uncertain)``: one run's metrics as a pure JAX
+function of a key and a dict of named parameters.
 ``StudyResult`` holds everything the report writes: flat numeric ``metrics``, ``tables`` (name →
 list of row dicts, written as CSV and into ``results.json``), ``assumptions`` (every value the paper
 did not give: name → {"value", "why"}), and matplotlib ``figures`` (name → Figure, written as PNG).
@@ -15,7 +10,6 @@ did not give: name → {"value", "why"}), and matplotlib ``figures`` (name → F
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -43,21 +37,6 @@ class PerRun:
     metric: Callable[[Any, dict[str, Any]], Any]
     nominal: dict[str, float]
     uncertain: dict[str, Any] = field(default_factory=dict)
-
-
-@dataclass(frozen=True)
-class Study:
-    name: str
-    description: str
-    config_cls: type
-    run: Callable[[Any, Callable[..., Any]], StudyResult]
-    per_run: Callable[[Any], PerRun] | None = None  # config -> PerRun, for `sweep` (optional)
-
-    def default_config(self, quick: bool = False) -> Any:
-        cfg = self.config_cls()
-        if quick and any(f.name == "quick" for f in dataclasses.fields(cfg)):
-            cfg = dataclasses.replace(cfg, quick=True)
-        return cfg
 
 
 def assumption(value: Any, why: str) -> dict[str, Any]:

@@ -37,7 +37,7 @@ import optax
 
 import jaxsim.montecarlo as mc
 from experiments import figures, stages
-from experiments.runner import Claim, Study, StudyResult, assumption
+from experiments.runner import Study, StudyResult, paper_facts
 from experiments.trms_ppo import PPOSettings, ppo_baseline
 from jaxsim.core.costs import Breakdown
 from jaxsim.problem import Param, ParamSpace, Problem, Scenario
@@ -45,7 +45,6 @@ from jaxsim.problem.reparam import Identity
 from jaxsim.problem.trms import PERTURBED, TRMSTuning
 from jaxsim.problem.trms import Scenario as TRMSScenario
 from optim import pso, random_search, tune
-from optim.compare import Curve, best_within
 
 STATE_LABELS = ("ψ", "φ", "ψ̇", "φ̇", "τ1", "τ2", "M_R")
 THETA_LABELS = (*(f"Q_{s}" for s in STATE_LABELS), "R_u1", "R_u2", *(f"W_{s}" for s in STATE_LABELS))
@@ -86,94 +85,7 @@ class Config:
     seed: int = 0
 
 
-ASSUMPTIONS = {
-    "parameter_set": assumption(
-        "feedback_manufacturer",
-        "the paper gives no model numbers; TRMS table 'from the Feedback manufacturer', JAMRIS 2025, "
-        "doi:10.14313/jamris-2025-026 (b2 = 0.09, Kgy = 0.5, kc = −0.2, Tp = 2, T0 = 3.5); the Sci. Rep. "
-        "2022 set (doi:10.1038/s41598-022-21357-3: b2 = 0.9, Kgy = 0.05, kc = 2) is the named variant "
-        "'scirep_2022'",
-    ),
-    "u_max": assumption(
-        2.5,
-        "±2.5 V input saturation as recalled from the Feedback manual (spec §B1.4); "
-        "not verified against an accessible primary source",
-    ),
-    "operating_point": assumption(
-        "pitch −0.05 rad, yaw 0, computed by find_equilibrium",
-        "centre of the pitch wave; with kc = −0.2 the tail rotor can only balance the reaction torque "
-        "for pitch ≲ 0.15 rad, so the references stay inside that trim envelope",
-    ),
-    "references": assumption(
-        "pitch square wave −0.2 ↔ +0.1 rad, period 20 s; yaw ±0.2 rad, period 30 s, phase-shifted 5 s "
-        "(yaw is −0.2 from t = 0 and switches at 5, 20, 35, 50 s; pitch switches every 10 s)",
-        "the paper gives none; spec §B1.4 suggests ±0.2 rad square waves, the pitch wave is shifted "
-        "into the trim envelope and the yaw wave phase-shifted so most steps do not coincide "
-        "(they do at 20 and 50 s); the ITAE clock of each axis is the time since its wave's last "
-        "switch, which for yaw before 5 s is the periodic wave's switch at −10 s",
-    ),
-    "sample_time": assumption(0.01, "s, controller period and RK4 plant step (spec §B1.4 suggests 0.01 s)"),
-    "sensor_noise": assumption(
-        2e-3, "rad, white noise on both angles (encoder-class resolution); Kalman–Bucy V = σ²·Ts"
-    ),
-    "observer": assumption(
-        "continuous Kalman–Bucy gain, observer ODE integrated exactly (ZOH of u and y) every period",
-        "the paper names a Kalman–Bucy filter for the continuous design",
-    ),
-    "friction_surrogate": assumption(
-        0.05,
-        "rad/s: sgn(v) → tanh(v/ε) on the tuning path; designs are re-evaluated and Monte-Carlo "
-        "tested with the exact sgn",
-    ),
-    "loss": assumption(
-        "Σ per-step ITAE + 0.01·∫‖u−u_eq‖² + 10·∫ max(0,|u|−u_max)² + 1e4·max(0, ρ(Φ_cl) − 0.999)²",
-        "the paper trades 'speed of response and energy efficiency' without a formula; ITAE is taken "
-        "per reference step (time since the channel's last switch)",
-    ),
-    "start_point": assumption(
-        "Bryson's rule: Q = diag(1/0.15², 1/0.2², 1, 1, 1, 1, 1), R = I/2.5², W = 1e-4·I",
-        "a standard engineer's first guess; the gradient tuner starts there",
-    ),
-    "search_box": assumption(
-        "log10 Q ∈ [−2, 4], log10 R ∈ [−3, 2], log10 W ∈ [−8, 0]",
-        "box for PSO, pyswarms and random search (and the gradient's reparametrisation)",
-    ),
-    "pso": assumption(
-        "30 particles × 50 iterations, w = 0.7, c1 = c2 = 1.5, global best",
-        "spec §B1.2 suggests 30 particles × 50–100 iterations, w = 0.7, c1 = c2 = 1.5",
-    ),
-    "gradient": assumption(
-        "Adam, learning rate 0.1, 150 steps, from the Bryson point",
-        "one loss + forward-mode gradient per step; counted as one simulation",
-    ),
-    "ppo": assumption(
-        "brax PPO, 2e6 ticks (quick 2e5), 64 envs, unroll 20, batch 64 × 8 minibatches, 4 updates, lr 1e-3, "
-        "γ = 0.98, action repeat 5, initial angles ± 0.05 rad, observation = state − trim and r − y",
-        "an untuned reinforcement-learning baseline on the same task and per-step loss (reward = −loss); "
-        "the policy sees the true state (no noise, no observer) and has no stability constraint",
-    ),
-    "monte_carlo": assumption(
-        "256 samples, uniform ±20 % on I1, I2, kc, a1, a2 and the noise std, fresh noise keys, exact sgn",
-        "the issue's ±20 % on I1, I2, kc, a1, a2 and sensor noise",
-    ),
-}
-
-
-CLAIMS = [  # the paper gives no numbers (spec §B1): the claims are its qualitative ones and invariants
-    Claim(
-        "gradient_vs_start_loss_ratio",
-        paper=1.0,
-        band=(0.0, 1.0),
-        source="seed004 lines 3302–3443: tuned Q/R improve on a first guess (here Bryson's rule)",
-    ),
-    Claim(
-        "gradient_vs_pso_loss_ratio",
-        paper=1.0,
-        band=(0.0, 1.05),
-        source="the study's hypothesis: gradient through Riccati + rollout matches the paper's PSO on equal budgets",
-        note="a full-preset claim: the quick budgets are too small to decide it",
-    ),
-]
+CLAIMS, ASSUMPTIONS = paper_facts("trms_lqr_tuning")
 
 
 def tuning_of(cfg: Config) -> TRMSTuning:
@@ -238,19 +150,13 @@ def searches(cfg: Config, problem: Problem, seed: int) -> dict[str, Callable[[],
     }
 
 
-def tuners(cfg: Config, problem: Problem, runs_by_seed: dict[str, list]) -> dict[str, Callable[..., Any]]:
+def tuners(cfg: Config, problem: Problem, seed_rows: list) -> dict[str, Callable[..., Any]]:
     """Gradient (deterministic, from Bryson's rule) and the searches, each repeated over
-    ``search_seeds`` seeds (every run kept in ``runs_by_seed``) and represented by its median run."""
+    ``search_seeds`` seeds (every run a row of ``seed_rows``) and represented by its median run."""
+    seeds = range(cfg.seed, cfg.seed + cfg.search_seeds)
 
     def median_of(name: str) -> Callable[..., Any]:
-        def run(*_):
-            runs_by_seed[name] = [
-                (s, searches(cfg, problem, s)[name]()) for s in range(cfg.seed, cfg.seed + cfg.search_seeds)
-            ]
-            ordered = sorted(runs_by_seed[name], key=lambda sr: sr[1].loss)
-            return ordered[(len(ordered) - 1) // 2][1]  # the lower median for an even count
-
-        return run
+        return lambda *_: stages.median_over_seeds(lambda s: searches(cfg, problem, s)[name](), seeds, name, seed_rows)
 
     grad = lambda *_: tune(problem, optimizer=optax.adam(cfg.learning_rate), steps=cfg.gradient_steps)  # noqa: E731
     return {"gradient": grad, **{name: median_of(name) for name in SEARCHES}}
@@ -274,11 +180,11 @@ def design_row(tr: TRMSTuning, evaluate: Callable, name: str, theta: Any) -> dic
 def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     tr = tuning_of(cfg)
     problem, robust = problems_of(cfg, tr)
-    runs_by_seed: dict[str, list] = {}
+    seed_rows: list[dict[str, Any]] = []
     cmp = stages.tune_and_compare(
         problem,
         cfg.pso_particles * cfg.pso_iters,
-        tuners(cfg, problem, runs_by_seed),
+        tuners(cfg, problem, seed_rows),
         progress=progress,
         table="tuners",
         figure="convergence",
@@ -308,15 +214,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         ),
     )
     if rl is not None:
-        by["brax_ppo"] = {
-            "design": "brax_ppo",
-            "loss": rl.loss.total,
-            "itae": rl.loss.itae,
-            "energy": rl.loss.energy,
-            "saturation": rl.loss.saturation,
-            "stability_penalty": 0.0,
-            "loss_exact_friction": rl.loss_exact_friction,
-        }
+        by["brax_ppo"] = rl.design_row()
         designs.append(by["brax_ppo"])
     mc_designs = {n: {"theta": jnp.asarray(thetas[n])} for n in ("gradient", "pso")}
     robustness = stages.robustness(
@@ -331,25 +229,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     )
 
     n_sims_grad = int(res["gradient"].n_sims)
-    seed_rows = [
-        {
-            "tuner": name,
-            "seed": seed,
-            "best_loss": float(r.loss),
-            "sims": int(r.n_sims),
-            "wall_s": float(r.wall_s),
-            "best_loss_within_gradient_sims": best_within(
-                Curve(
-                    np.asarray(r.history.sims, float),
-                    np.asarray(r.history.wall_s, float),
-                    np.asarray(r.history.best_loss, float),
-                ),
-                sims=n_sims_grad,
-            ),
-        }
-        for name, runs in runs_by_seed.items()
-        for seed, r in runs
-    ]
+    seed_rows = stages.seed_rows_within(seed_rows, n_sims_grad, "best_loss_within_gradient_sims")
     curve, pso_best = cmp.comparison.curves["gradient"], float(res["pso"].loss)
     reached = np.nonzero(curve.best_loss <= pso_best)[0]
     ratio = _gradient_cost_ratio(tr) if cfg.measure_gradient_cost else float("nan")
@@ -357,8 +237,8 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         "loss_start": by["bryson_start"]["loss"],
         "search_seeds": cfg.search_seeds,
         **{
-            f"loss_{n}_seeds_{f.__name__}": f(float(r.loss) for _, r in runs)
-            for n, runs in runs_by_seed.items()
+            f"loss_{n}_seeds_{f.__name__}": f(r["best_loss"] for r in seed_rows if r["tuner"] == n)
+            for n in SEARCHES
             for f in (min, max)
         },
         "loss_pso_then_gradient": float("nan") if polish is None else float(polish.loss),
@@ -384,27 +264,9 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         )
     rows = cmp.tables["tuners"]
     if rl is not None:
-        n_ticks = int(round(cfg.t_final / cfg.ts))
-        metrics.update(
-            {
-                "loss_rl_ppo": rl.loss.total,
-                "loss_exact_friction_rl_ppo": rl.loss_exact_friction,
-                "return_rl_ppo": -rl.rollout_loss,  # Σ env rewards: must equal −loss_rl_ppo
-                "env_steps_rl_ppo": rl.env_steps,
-                "sims_rl_ppo": rl.env_steps / n_ticks,
-                "wall_rl_ppo_s": rl.wall_s,
-            }
-        )
-        rows.append(
-            {
-                "tuner": "brax_ppo",
-                "best_loss": rl.loss.total,
-                "sims": rl.env_steps / n_ticks,
-                "wall_s": rl.wall_s,
-                "message": f"{rl.env_steps} env steps (ticks) = {rl.env_steps / n_ticks:.0f} episodes of the "
-                "horizon; wall time includes brax's compilation",
-            }
-        )
+        ppo_metrics, ppo_row = rl.report(n_ticks=int(round(cfg.t_final / cfg.ts)))
+        metrics.update(ppo_metrics)
+        rows.append(ppo_row)
     if polish is not None:
         rows.append(
             {

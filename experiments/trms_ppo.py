@@ -3,7 +3,7 @@
 
 The trained policy is rolled out deterministically (the mode of its action distribution) from the
 trim state over the study's horizon; its inputs are then replayed through the study's own loss
-(:meth:`~experiments.trms_problem.TRMSTuning.loop_terms` on an open-loop controller), so the PPO
+(:meth:`~jaxsim.problem.trms.TRMSTuning.loop_terms` on an open-loop controller), so the PPO
 row is scored exactly as the LQG designs (no stability penalty: it applies to linear designs only).
 Budget: environment steps (controller ticks) and wall time of ``ppo.train`` *including* its
 compilation, which brax does inside ``train``.
@@ -19,9 +19,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from experiments.trms_problem import Breakdown, TRMSTuning
 from jaxsim.control.open_loop import open_loop
 from jaxsim.core.rollout import ClosedLoop
+from jaxsim.problem.trms import Breakdown, TRMSTuning
 
 
 @dataclass(frozen=True)
@@ -58,6 +58,35 @@ class PPOResult(NamedTuple):
     env_steps: int  # controller ticks simulated in training
     wall_s: float  # ppo.train wall time, compilation included
     rollout: PolicyRollout  # exact-friction rollout (for the response plot)
+
+    def design_row(self) -> dict[str, Any]:
+        """The study's ``designs`` row (no stability penalty: it applies to linear designs only)."""
+        b = self.loss
+        terms = {"itae": b.itae, "energy": b.energy, "saturation": b.saturation, "stability_penalty": 0.0}
+        return {"design": "brax_ppo", "loss": b.total, **terms, "loss_exact_friction": self.loss_exact_friction}
+
+    def report(self, n_ticks: int) -> tuple[dict[str, float], dict[str, Any]]:
+        """The study's PPO metrics and its ``tuners`` row; ``n_ticks`` per episode turns env steps
+        into simulations of the horizon."""
+        episodes = self.env_steps / n_ticks
+        metrics = {
+            "loss_rl_ppo": self.loss.total,
+            "loss_exact_friction_rl_ppo": self.loss_exact_friction,
+            "return_rl_ppo": -self.rollout_loss,  # Σ env rewards: must equal −loss_rl_ppo
+            "env_steps_rl_ppo": self.env_steps,
+            "sims_rl_ppo": episodes,
+            "wall_rl_ppo_s": self.wall_s,
+        }
+        row = {
+            "tuner": "brax_ppo",
+            "best_loss": self.loss.total,
+            "sims": episodes,
+            "wall_s": self.wall_s,
+            "message": f"{self.env_steps} env steps (ticks) = {episodes:.0f} episodes of the horizon; "
+            "wall time includes brax's compilation",
+        }
+        return metrics, row
+
     rollout_loss: float  # −Σ env rewards of the policy rollout on the surrogate plant (== loss.total)
 
 

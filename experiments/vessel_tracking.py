@@ -28,7 +28,7 @@ import optax
 
 import jaxsim.montecarlo as mc
 from experiments import figures, stages
-from experiments.runner import Claim, PerRun, Study, StudyResult, assumption
+from experiments.runner import Claim, PerRun, Study, StudyResult, paper_facts
 from jaxsim.plants.radar import radar, scan_times
 from jaxsim.problem.vessel_tracking import (
     BASE_TRACKERS,
@@ -88,62 +88,7 @@ def _claim(stem: str, speed: float, target: Any) -> Claim:
 PAPER = {stem: paper for stem, _, _, paper in ENVELOPE}
 CLAIMS = [_claim(stem, v, paper[v]) for stem, _, _, paper in ENVELOPE for v in (10, 20)]
 
-ASSUMPTIONS = {
-    "noise": assumption(
-        "range σ 7 m, cross-range σ 7 m at 8 km (bearing σ 0.050°), plus the 6 m / 0.03° resolution cells",
-        "the paper gives only the resolution and says σ̂ ≈ 10 m 'reflects the RMS coordinate error': a 2-D "
-        "RMS of 10 m is 7.07 m per coordinate; the extended-echo (centroid) error dominates the cells",
-    ),
-    "target_range": assumption(8000.0, "a VTS radar's typical range; it sets the bearing error in metres"),
-    "turn_angle_deg": assumption(90.0, "not stated; a 300 m arc flown for the paper's 45 s at 10 m/s is 86°"),
-    "turn_timing": assumption(
-        "turn from t = 45 s at both speeds (ends 92.1 s at 10 m/s, 68.6 s at 20 m/s); run 120 s",
-        "the paper gives [45, 90] s at 10 m/s only; at 20 m/s it shows the window recovering on [65, 75] s, "
-        "which fits the same start time",
-    ),
-    "kappa": assumption(
-        "√(3π/2) = 2.171",
-        "the paper writes σ̂ = mean(Δz⁽²⁾) and says it settles at ≈ 10 m, the RMS plot error; under CV "
-        "mean(Δz⁽²⁾) = √(3π/2)·(2-D RMS), so this normaliser makes σ̂ that RMS (κ = 1 gives σ̂ ≈ 22 m; "
-        "table sensitivity)",
-    ),
-    "tnorm": assumption("product", "not stated; min is in table sensitivity"),
-    "max_with_previous": assumption(
-        "max of the raw Sugeno outputs m_t, m_{t−1}",
-        "with the final previous value the maximum could never fall, contradicting Fig. 5",
-    ),
-    "warm_up": assumption(30.0, "statistics and gate checks start when the 10-plot window is full"),
-    "recovery": assumption(
-        10.0, "the paper says the window changes within 10 s; the turn phase includes 10 s after the turn ends"
-    ),
-    "track_loss": assumption(
-        "first scan ≥ warm_up whose plot is farther than the gate radius from the one-scan prediction",
-        "the paper uses the filtered error ε as a proxy for the gate width; a gate sees the prediction",
-    ),
-    "loss_population": assumption(
-        "speed U(10, 20) m/s, turn start U(45, 48) s, 90° turn, radar noise as above",
-        "the paper's two speeds and everything between; the turn need not start at a scan",
-    ),
-    "gate": assumption(
-        50.0,
-        "default gate: the paper's 30 m strobe loses most tracks once one-scan "
-        "prediction errors are counted (table track_loss); at 50 m the trackers differ most",
-    ),
-    "kalman_q": assumption(
-        0.25,
-        "CV Kalman white-noise acceleration (m²/s³): σ_a ≈ 0.5 m/s² per 3 s scan, "
-        "between the 0.33 and 1.33 m/s² of the two turns",
-    ),
-    "imm": assumption(
-        "CV q 0.01, CT q 0.05 m²/s³, turn-rate q 1e-4 rad²/s³, switch 0.05 per scan",
-        "textbook CV/CT IMM settings (Bar-Shalom et al. §11.7) for a 3 s scan",
-    ),
-    "tuning": assumption(
-        "per-input slopes and centres; Adam 0.05; soft gate T = 2 m; soft selector T = 0.25",
-        "the paper's (a, c) = (5, 1.5) are an expert's choice; the temperatures keep the "
-        "surrogate within a few % of the exact loss (table tuning)",
-    ),
-}
+_, ASSUMPTIONS = paper_facts("vessel_tracking")
 
 
 def per_run(cfg: Config) -> PerRun:

@@ -17,12 +17,11 @@ import pytest
 
 from experiments import cli, output_folder, registry
 from experiments.output_folder import MARKER
-from experiments.study import PerRun, Study, StudyResult
+from experiments.runner import PerRun, Study, StudyResult
 
 
 @dataclass(frozen=True)
 class Config:
-    quick: bool = False
     answer: float = 42.0
     tables: int = 2  # how many tables the run writes (fewer on a later run: stale files must go)
     fail: bool = False  # raise inside the study, after "computing"

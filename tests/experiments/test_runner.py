@@ -13,8 +13,7 @@ import pytest
 
 import experiments
 from experiments import cli, registry
-from experiments.runner import Claim, Study, StudyResult, as_study, assumption, check_claims
-from experiments.study import Study as LegacyStudy
+from experiments.runner import PAPERS, Claim, Study, StudyResult, as_study, assumption, check_claims, paper_facts
 
 
 @dataclass(frozen=True)
@@ -102,8 +101,8 @@ def test_config_resolution_preset_then_overrides():
 
     with pytest.raises(ValueError, match="no `quick` field"):
         Study("s", "", WithQuick, _run)
-    legacy = as_study(LegacyStudy("old", "old shape", WithQuick, _run))
-    assert legacy.resolve("quick") == ("quick", WithQuick(quick=True)) and legacy.legacy
+    with pytest.raises(ValueError, match="expected an experiments.runner.Study, got dict"):
+        as_study({"name": "old"})
 
 
 def test_cli_runs_the_resolved_config_and_writes_the_reproduction_table(tmp_path, fake, capsys):
@@ -187,3 +186,28 @@ def test_html_report_links_and_images_resolve(tmp_path, fake, capsys):
     assert "a &lt;fake&gt; study" in page and "<fake>" not in page  # text is escaped
     assert cli.main(["report", str(tmp_path / "nowhere")]) == 2
     assert "is not a folder" in capsys.readouterr().err
+
+
+def test_paper_facts_are_read_from_toml_and_bad_files_are_named(tmp_path):
+    (tmp_path / "s.toml").write_text(
+        '[[claims]]\nmetric = "gain"\npaper = 2.0\nband = [1.5, 2.5]\nsource = "paper, Table 1"\n\n'
+        '[assumptions.noise]\nvalue = [0.1, 0.2]\nwhy = "not given"\n'
+    )
+    claims, assumptions = paper_facts("s", tmp_path)
+    assert claims == [Claim("gain", paper=2.0, band=(1.5, 2.5), source="paper, Table 1")]
+    assert assumptions == {"noise": {"value": [0.1, 0.2], "why": "not given"}}
+    (tmp_path / "bad.toml").write_text('[[claims]]\nmetric = "g"\npaper = 1.0\nrel_tol = 0.1\nsorce = "typo"\n')
+    with pytest.raises(ValueError, match=r"bad.toml: claims\[0\] has unknown field\(s\) sorce"):
+        paper_facts("bad", tmp_path)
+    (tmp_path / "bad2.toml").write_text("[assumptions.x]\nvalue = 1\n")
+    with pytest.raises(ValueError, match="assumptions.x must have exactly 'value' and 'why'"):
+        paper_facts("bad2", tmp_path)
+    with pytest.raises(ValueError, match="paper facts of study 'absent': cannot read"):
+        paper_facts("absent", tmp_path)
+
+
+def test_every_paper_file_belongs_to_a_study_and_loads():
+    for path in sorted(PAPERS.glob("*.toml")):
+        assert (PAPERS.parent / f"{path.stem}.py").exists(), path
+        claims, assumptions = paper_facts(path.stem)
+        assert assumptions and all(a["why"] for a in assumptions.values()), path
