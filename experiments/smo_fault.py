@@ -14,7 +14,6 @@ The loop, observer and error statistics are :mod:`jaxsim.problem.servo_fault` (p
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -26,20 +25,17 @@ import optax
 from experiments import figures, stages
 from experiments.runner import Claim, Study, StudyResult, paper_facts
 from jaxsim.core.integrators import RK4
-from jaxsim.core.rollout import Timing, simulate
 from jaxsim.estimation import reduced_order_smo as smo
 from jaxsim.plants import servo_drive as sd
-from jaxsim.problem import Param, ParamSpace, Problem
 from jaxsim.problem.servo_fault import (
     SPREAD_FIELDS,
     FaultSetup,
     error_stats,
+    gain_tuning_problem,
     observer,
     perturbed,
-    position_loop,
     run_once,
 )
-from optim.reparam import Positive
 
 PAPER_CLAIM = 0.0035  # seed 000 paper 2, line 1931: "does not exceed 0.35 % of the identified value"
 MC_CASES = {  # name -> (noise level index or None, with the parameter spread)
@@ -147,52 +143,6 @@ def monte_carlo(cfg: Config, par: smo.SMOParams, progress: Callable[..., Any]) -
     return rows
 
 
-# --- tuning -------------------------------------------------------------------------------------
-
-
-def tuning_problem(cfg: Config) -> Problem:
-    """``(k1, k3, τ)`` of the smooth surrogate with an equivalent-injection filter: mean-square
-    relative identification error on ``tune_keys`` noisy runs around the fault (the plant runs are
-    simulated once; the loss re-runs only the observer).  Searched in log coordinates, unbounded
-    (``exp``), from the paper's gains and τ = 1e-4 s."""
-    ts, onset = cfg.sample_period, sd.FaultParams().onset
-    level = cfg.tune_noise_level
-    noise = jnp.array([cfg.angle_noise[level], cfg.current_noise[level]])
-    keys = jax.random.split(jax.random.PRNGKey(cfg.seed + 7), cfg.tune_keys)
-    loop = position_loop(cfg, sd.ServoParams(), noise)
-    timing = Timing(round((onset + cfg.tune_window) / ts) * ts, ts)
-    trs = jax.jit(jax.vmap(lambda k: simulate(loop, sd.initial_state(sd.ServoParams(), 0.0), timing, key=k)))(keys)
-    start = int(round((onset - 0.1) / ts))
-    t, y, u, x = jax.tree_util.tree_map(lambda a: a[:, start:], (trs.t, trs.y_meas, trs.u, trs.x))
-    m_true = jax.vmap(jax.vmap(sd.fault_torque, (None, 0, 0)), (None, 0, 0))(sd.ServoParams(), x, t)
-    template = observer(cfg, scheme="smooth", filter_tau=1e-4, check=False)
-    window, scale = t[0] >= onset + cfg.settle, jnp.max(jnp.abs(m_true))
-
-    def loss(params, draw, key):
-        k1, k3, tau = params["theta"]
-        par = dataclasses.replace(template, gains=smo.SMOGains(k1, cfg.k2, k3), filter_tau=tau)
-
-        def one(t_, y_, u_, m):
-            m_hat = jax.vmap(sd.fault_torque_from_estimate, (None, 0, 0))(
-                sd.ServoParams(), t_, smo.smo_filter(par, t_, y_, u_).d_hat
-            )
-            return jnp.sum(jnp.where(window, ((m_hat - m) / scale) ** 2, 0.0)) / jnp.sum(window)
-
-        return jnp.mean(jax.vmap(one)(t, y, u, m_true))
-
-    space = ParamSpace(
-        theta=Param(
-            lo=(1e5, 1e2, 1e-6),
-            hi=(1e9, 1e6, 1e-2),
-            init=(cfg.k1, cfg.k3, 1e-4),
-            log=True,
-            labels=("k1", "k3", "filter_tau"),
-            reparam=Positive(method="exp"),
-        )
-    )
-    return Problem.from_loss("smo_gains", space, loss)
-
-
 # --- the study ----------------------------------------------------------------------------------
 
 
@@ -234,8 +184,16 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     )
     mc_rows = monte_carlo(cfg, exact, progress)
 
+    level = cfg.tune_noise_level
+    problem = gain_tuning_problem(
+        cfg,
+        ts,
+        jnp.array([cfg.angle_noise[level], cfg.current_noise[level]]),
+        jax.random.split(jax.random.PRNGKey(cfg.seed + 7), cfg.tune_keys),
+        cfg.tune_window,
+    )
     tuning = stages.gradient_tuning(
-        tuning_problem(cfg),
+        problem,
         steps=cfg.tune_steps,
         mode="forward",
         optimizer=optax.adam(cfg.tune_learning_rate),
