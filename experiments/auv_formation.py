@@ -56,7 +56,21 @@ class Config(FormationSetup):  # + the scenario, loop, windows and tuning loss o
     seed: int = 0
 
 
-PRESETS = {"quick": dict(mc_runs=4, tune_samples=2, tune_holdout=2, tune_steps=2)}
+PRESETS = {
+    "quick": dict(mc_runs=4, tune_samples=2, tune_holdout=2, tune_steps=2),
+    "tiny": dict(  # a 12 s run: every stage once (the test's preset)
+        t_final=12.0,
+        ss_window=(8.0, 12.0),
+        t32_window=(10.0, 12.0),
+        mc_runs=2,
+        tune_samples=2,
+        tune_holdout=2,
+        tune_steps=1,
+        tune_t_final=7.0,
+        tune_loss_start=4.0,
+        tune_dt=0.004,
+    ),
+}
 SOURCE = "seed 002, study 1, Fig. 4 (spec 002.4, exact leader pose)"
 CLAIMS = [
     Claim("err0_m", paper=7.8, rel_tol=1e-9, source=SOURCE + ": 7.8 m at t = 4 s (3 + 1.2·4)"),

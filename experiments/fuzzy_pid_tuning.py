@@ -287,7 +287,10 @@ STUDY = Study(
     "constraints; tune Mamdani and Sugeno breakpoints",
     config=Config,
     presets={
-        "quick": dict(budget=81, pso_particles=9, grid_points_per_dim=3, n_starts=3, fis_steps=15, t_final=4.0, dt=4e-3)
+        "quick": dict(
+            budget=81, pso_particles=9, grid_points_per_dim=3, n_starts=3, fis_steps=15, t_final=4.0, dt=4e-3
+        ),
+        "tiny": dict(budget=16, pso_particles=4, grid_points_per_dim=2, n_starts=2, fis_steps=2, t_final=2.0, dt=0.01),
     },
     claims=CLAIMS,
     assumptions=ASSUMPTIONS,

@@ -11,12 +11,11 @@ from pathlib import Path
 from tests.conftest import CACHE_DIR, ROOT
 
 
-def run_quick_study(name: str, out: Path, *extra: str, timeout: float = 900) -> dict:
-    """``python -m experiments run NAME --quick [EXTRA...] --out OUT``; asserts success, returns results.json.
-
-    ``extra``: further arguments, e.g. ``"--set", "budget=64"``."""
+def run_quick_study(name: str, out: Path, *extra: str, preset: str = "quick", timeout: float = 900) -> dict:
+    """``python -m experiments run NAME --preset PRESET [EXTRA...] --out OUT``; asserts success, returns
+    results.json.  ``extra``: further arguments, e.g. ``"--set", "budget=64"``."""
     proc = subprocess.run(
-        [sys.executable, "-m", "experiments", "run", name, "--quick", *extra, "--out", str(out)],
+        [sys.executable, "-m", "experiments", "run", name, "--preset", preset, *extra, "--out", str(out)],
         capture_output=True,
         text=True,
         cwd=ROOT,

@@ -72,25 +72,18 @@ def test_tuning_gradient_matches_finite_differences():
     assert jnp.isfinite(loss(theta))
 
 
-SHORT = {
-    "t_final": 12.0,
-    "ss_window": [8.0, 12.0],
-    "t32_window": [10.0, 12.0],
-    "mc_runs": 2,
-    "tune_steps": 2,
-    "tune_t_final": 7.0,
-    "tune_loss_start": 4.0,
-    "tune_dt": 0.004,
-}
+SHORT = {"tune_steps": 2}  # over the tiny preset's 1
 
 
 @pytest.mark.slow  # a 12 s study run through the CLI: a few compilations
-def test_quick_preset_with_overrides_through_the_cli(tmp_path):
-    """``--quick --set …``: the recorded config is the quick preset plus the overrides, and it is what
-    ran (horizon, Monte-Carlo runs, tuning steps); the reproduction table checks the paper's claims."""
-    res = run_quick_study("auv_formation", tmp_path, *[a for k, v in SHORT.items() for a in ("--set", f"{k}={v}")])
+def test_tiny_preset_with_an_override_through_the_cli(tmp_path):
+    """``--preset tiny --set …``: the recorded config is the tiny preset plus the override, and it is
+    what ran (horizon, Monte-Carlo runs, tuning steps); the reproduction table checks the paper's claims."""
+    args = [a for k, v in SHORT.items() for a in ("--set", f"{k}={v}")]
+    res = run_quick_study("auv_formation", tmp_path, *args, preset="tiny")
     cfg, m = res["config"], res["metrics"]
-    assert res["preset"] == "quick" and cfg == {**cfg, **SHORT} and cfg["tune_samples"] == 2  # quick's value
+    assert res["preset"] == "tiny" and cfg == {**cfg, **SHORT} and cfg["tune_samples"] == 2  # tiny's value
+    assert cfg["t_final"] == 12.0 and cfg["ss_window"] == [8.0, 12.0]
     assert m["mc_runs"] == 2 and m["tune_steps"] == 2 and len(res["tables"]["tuning_history"]) == 2
     assert res["tables"]["error_bands"] == []  # its windows start at 32 s, after this 12 s run
     rows = {r["metric"]: r for r in res["reproduction"]}

@@ -1,4 +1,4 @@
-"""The fuzzy_pid_tuning study through the CLI: the quick preset with its sizes cut by --set (the config
+"""The fuzzy_pid_tuning study through the CLI: the tiny preset with a --set override (the config
 recorded is the one that ran), equal budgets, the claims (K_mds, the paper's controller infeasible, the
 Sugeno template on the paper's characteristic, the linear settling time) and closed-form checks."""
 
@@ -6,25 +6,22 @@ import pytest
 
 from tests.experiments.study_cli import run_quick_study
 
-TINY = ("budget=16", "pso_particles=4", "grid_points_per_dim=2", "n_starts=2", "fis_steps=2", "t_final=2.0", "dt=0.01")
-
 
 @pytest.fixture(scope="module")
 def results(tmp_path_factory):
     out = tmp_path_factory.mktemp("fpt")
-    args = [a for kv in TINY for a in ("--set", kv)]
-    return out, run_quick_study("fuzzy_pid_tuning", out, *args)
+    return out, run_quick_study("fuzzy_pid_tuning", out, "--set", "fis_steps=3", preset="tiny")
 
 
 def test_config_is_what_ran_and_budgets_are_equal(results):
     out, res = results
     cfg, m = res["config"], res["metrics"]
-    assert res["preset"] == "quick" and "quick" not in cfg
+    assert res["preset"] == "tiny" and "quick" not in cfg
     assert cfg["budget"] == m["budget_evals"] == 16 and cfg["dt"] == m["dt"] == 0.01 and m["t_final"] == 2.0
-    assert cfg["fis_steps"] == m["fis_steps"] == 2
+    assert cfg["fis_steps"] == m["fis_steps"] == 3  # --set over the preset's 2
     assert m["sims_gradient"] == m["sims_pso"] == m["sims_grid"] == 16 * m["operating_points"]
     rows = {r["method"]: r for r in res["tables"]["fuzzy_systems"]}
-    assert rows["sugeno (gradient)"]["sims"] == 2 * m["operating_points"]
+    assert rows["sugeno (gradient)"]["sims"] == 3 * m["operating_points"]
     tuners = {r["tuner"]: r for r in res["tables"]["tuners"]}
     assert set(tuners) == {"gradient", "pso", "grid"} and tuners["pso"]["message"].startswith("4 iterations of 4")
     for png in ("tuning_comparison", "tuned_characteristics", "tuned_transients"):

@@ -1,4 +1,4 @@
-"""The trms_lqr_tuning study through the CLI: the quick preset with its sizes cut by --set (the config
+"""The trms_lqr_tuning study through the CLI: the tiny preset with a --set override (the config
 recorded is the one that ran), equal budgets, consistent tables, the reproduction table; the brax PPO
 baseline in a separate slow run."""
 
@@ -8,23 +8,21 @@ import pytest
 
 from tests.experiments.study_cli import run_quick_study
 
-TINY = ("t_final=2.0", "gradient_steps=3", "pso_particles=4", "pso_iters=2", "mc_samples=4", "ppo_timesteps=0")
-
 
 def _run(out, *settings):
-    return run_quick_study("trms_lqr_tuning", out, *[a for kv in settings for a in ("--set", kv)])
+    return run_quick_study("trms_lqr_tuning", out, *[a for kv in settings for a in ("--set", kv)], preset="tiny")
 
 
 @pytest.fixture(scope="module")
 def study_output(tmp_path_factory):
     out = tmp_path_factory.mktemp("trms")
-    return out, _run(out, *TINY)
+    return out, _run(out, "gradient_steps=3")
 
 
 def test_config_is_what_ran_and_budgets_are_equal(study_output):
     out, res = study_output
     cfg, m = res["config"], res["metrics"]
-    assert res["preset"] == "quick" and "quick" not in cfg
+    assert res["preset"] == "tiny" and "quick" not in cfg
     assert cfg["t_final"] == 2.0 and cfg["search_seeds"] == 1 and not cfg["measure_gradient_cost"]  # --set, preset
     assert m["sims_pso"] == m["sims_random"] == m["sims_pyswarms"] == 4 * 2 and m["sims_gradient"] == 3
     assert math.isnan(float(m["gradient_eval_cost_in_loss_evals"]))  # JSON writes NaN as "nan"
@@ -63,7 +61,7 @@ def test_tables_agree_and_claims_are_checked(study_output):
 @pytest.mark.slow
 def test_ppo_baseline_row(tmp_path):
     """The brax PPO baseline ran with its stated budget and was scored with the study's loss."""
-    res = _run(tmp_path, *TINY[:-1], "ppo_timesteps=100000")
+    res = _run(tmp_path, "gradient_steps=3", "ppo_timesteps=100000")
     m, cfg = res["metrics"], res["config"]
     n_ticks = round(cfg["t_final"] / cfg["ts"])
     assert m["env_steps_rl_ppo"] >= cfg["ppo_timesteps"] == 100_000
