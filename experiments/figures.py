@@ -7,7 +7,8 @@
 * :func:`probability_curves` — event probabilities with their confidence intervals vs a parameter;
 * :func:`mc_cdfs` — empirical CDFs (from the quantile sketches) of Monte-Carlo metrics, one line per result;
 * :func:`line_panels` — side-by-side panels of labelled curves (characteristics, transients), declared as data;
-* :func:`box_by_group` — box plots of one quantity per group (Monte-Carlo cases), with a reference line.
+* :func:`box_by_group` — box plots of one quantity per group (Monte-Carlo cases), with a reference line;
+* :func:`panel` — one panel of :func:`line_panels`; :func:`parity` — computed vs reference values around y = x.
 """
 
 from __future__ import annotations
@@ -227,5 +228,29 @@ def line_panels(panels: list[dict[str, Any]], *, title: str | None = None, size:
         ax.legend(fontsize=8)
     if title:
         fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def panel(lines: dict[str, tuple], x_label: str, y_label: str, **options: Any) -> dict[str, Any]:
+    """One panel of :func:`line_panels`: ``lines`` (label → ``(x, y)`` or ``(x, y, style)``), the axis
+    labels with units and the optional keys (``title``, ``xlim``, ``ylim``, ``log_y``, ``hline``)."""
+    return {"lines": lines, "x_label": x_label, "y_label": y_label, **options}
+
+
+def parity(
+    points: dict[str, tuple[Any, Any]], *, x_label: str, y_label: str, title: str | None = None, size=(6.5, 5.0)
+):
+    """Computed against reference values: ``points[label] = (x, y)`` as hollow markers, one marker
+    shape per label, and the identity line ``y = x`` over ±1.1·max|x|."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=size)
+    for k, (label, (x, y)) in enumerate(points.items()):
+        ax.scatter(x, y, marker="os^Dv<>p"[k % 8], facecolors="none", edgecolors=f"C{k}", label=label)
+    lim = 1.1 * max((float(np.max(np.abs(x))) for x, _ in points.values() if len(x)), default=1.0)
+    ax.plot([-lim, lim], [-lim, lim], "k-", lw=0.6)
+    ax.set(xlabel=x_label, ylabel=y_label, title=title or "")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
     fig.tight_layout()
     return fig

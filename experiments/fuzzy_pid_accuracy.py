@@ -27,9 +27,9 @@ import numpy as np
 import optax
 
 from experiments import figures, stages
-from experiments.runner import Claim, Study, StudyResult, paper_facts
+from experiments.runner import Study, StudyResult, paper_facts
 from jaxsim.control import fuzzy as fz
-from jaxsim.control.fuzzy_steady_state import section_domains, steady_state_error
+from jaxsim.control.fuzzy_steady_state import section_domains
 from jaxsim.problem.fuzzy_accuracy import (
     CONTROLLERS,
     PLANTS,
@@ -37,9 +37,12 @@ from jaxsim.problem.fuzzy_accuracy import (
     Case,
     channels,
     designs,
+    make_case,
     mamdani_fit_problem,
+    plant_gain,
     run_all,
     small_gain,
+    with_steady_states,
 )
 
 
@@ -58,26 +61,7 @@ class Config(AccuracySetup):  # + the plants, characteristics, fuzzy PI and simu
 
 
 PRESETS = {"quick": dict(grid_g=(1.5,), grid_f=(0.3, 2.5), mamdani_fit_steps=60)}
-SOURCE = "seed 000 paper 1, §1.4 (spec; the paper prints two decimals)"
-CLAIMS = [
-    Claim("kp_mds_static", paper=0.4, rel_tol=1e-6, source="seed 000 paper 1, §1.3: K_mds = 0.4 (static plant)"),
-    Claim("kp_mds_astatic", paper=1.25, rel_tol=1e-6, source="seed 000 paper 1, §1.3: K_mds = 1.25 (astatic plant)"),
-    *(
-        Claim(f"ess_{case}", paper=v, abs_tol=0.005, source=f"{SOURCE}, item {item}", note=note)
-        for case, v, item, note in (
-            ("static_f0_fuzzy", 0.56, 1, "exact 5/9"),
-            ("static_f0_linear", 0.56, 1, "exact 5/9"),
-            ("static_f03_fuzzy", 0.81, 2, "eq. (2)"),
-            ("static_f03_linear", 0.89, 2, "exact 8/9"),
-            ("astatic_f02_fuzzy", 0.16, 3, "f/K1"),
-            ("astatic_f02_linear", 0.16, 3, "f/K1"),
-            ("astatic_f07_fuzzy", 0.46, 4, "a + (f − b)/K2"),
-            ("astatic_f07_linear", 0.56, 4, "the paper's formula is lost; f/K_mds [ours]"),
-        )
-    ),
-]
-
-_, ASSUMPTIONS = paper_facts("fuzzy_pid_accuracy")
+CLAIMS, ASSUMPTIONS = paper_facts("fuzzy_pid_accuracy")
 
 
 def _case_key(plant: str, f: float) -> str:
@@ -85,50 +69,31 @@ def _case_key(plant: str, f: float) -> str:
 
 
 def build_cases(cfg: Config, gains: dict) -> list[Case]:
-    """The paper's four cases (fuzzy and linear P), Fig. 3's FC1, Fig. 6's PIs and the grid."""
-    cases: list[Case] = []
+    """The paper's four cases (fuzzy and linear P), Fig. 3's FC1, Fig. 6's PIs and the grid, each with its
+    analytic steady state."""
+
+    def case(kind, plant, ctrl, g=cfg.g, f=0.0, g_slope=0.0, f_slope=0.0, chars=None):
+        return make_case(kind, plant, ctrl, chars or channels(cfg, gains, plant, ctrl), g, f, g_slope, f_slope)
+
     paper_f = {"static": cfg.f_static, "astatic": cfg.f_astatic}
-    for plant in PLANTS:
-        for f in paper_f[plant]:
-            for ctrl in ("fuzzy P", "linear P"):
-                p, i = channels(cfg, gains, plant, ctrl)
-                cases.append(
-                    Case(kind="paper", plant=plant, controller=ctrl, p=p, i=i, g=cfg.g, g_slope=0.0, f=f, f_slope=0.0)
-                )
-    cases.append(
-        Case(
-            kind="fig3",
-            plant="static",
-            controller="FC1",
-            p=fz.three_section(*cfg.fc1_static),
-            i=None,
-            g=cfg.g,
-            g_slope=0.0,
-            f=0.0,
-            f_slope=0.0,
-        )
-    )
-    for ctrl in ("linear PI", "fuzzy PI"):
-        p, i = channels(cfg, gains, "astatic", ctrl)
-        cases.append(
-            Case(
-                kind="fig6", plant="astatic", controller=ctrl, p=p, i=i, g=cfg.g, g_slope=0.0, f=cfg.fig6_f, f_slope=0.0
-            )
-        )
     grid = list(itertools.product(cfg.grid_g, cfg.grid_f, cfg.grid_g_slope, cfg.grid_f_slope))
-    for plant in PLANTS:
-        for ctrl in CONTROLLERS:
-            p, i = channels(cfg, gains, plant, ctrl)
-            cases += [
-                Case(kind="grid", plant=plant, controller=ctrl, p=p, i=i, g=g, g_slope=kg, f=f, f_slope=kf)
-                for g, f, kg, kf in grid
-            ]
-    K = {"static": cfg.K_static, "astatic": cfg.K_astatic}
-    for c in cases:
-        c["op"] = steady_state_error(
-            c["plant"], K[c["plant"]], c["p"], c["i"], g=c["g"], g_slope=c["g_slope"], f=c["f"], f_slope=c["f_slope"]
-        )
-    return cases
+    return with_steady_states(
+        cfg,
+        [
+            case("paper", plant, ctrl, f=f)
+            for plant in PLANTS
+            for f in paper_f[plant]
+            for ctrl in ("fuzzy P", "linear P")
+        ]
+        + [case("fig3", "static", "FC1", chars=(fz.three_section(*cfg.fc1_static), None))]
+        + [case("fig6", "astatic", ctrl, f=cfg.fig6_f) for ctrl in ("linear PI", "fuzzy PI")]
+        + [case("grid", pl, ctrl, g, f, kg, kf) for pl in PLANTS for ctrl in CONTROLLERS for g, f, kg, kf in grid],
+    )
+
+
+def _fields(source: Any, *names: str) -> dict[str, Any]:
+    """``{name: source[name]}`` (a case) or ``{name: source.name}`` (an operating point), in order."""
+    return {k: source[k] if isinstance(source, dict) else getattr(source, k) for k in names}
 
 
 def paper_rows(cfg: Config, cases: list[Case]) -> tuple[dict[str, float], list[dict[str, Any]]]:
@@ -143,17 +108,12 @@ def paper_rows(cfg: Config, cases: list[Case]) -> tuple[dict[str, float], list[d
             f"settling_{name}": float(c["settling"]),
             f"overshoot_{name}": float(c["overshoot"]),
         }
-        lim1, lim2 = section_domains(c["plant"], cfg.K_static if c["plant"] == "static" else cfg.K_astatic, c["p"])
+        lim1, lim2 = section_domains(c["plant"], plant_gain(cfg, c["plant"]), c["p"])
         rows.append(
             {
-                "plant": c["plant"],
-                "g": c["g"],
-                "f": c["f"],
-                "controller": c["controller"],
+                **_fields(c, "plant", "g", "f", "controller"),
                 "K1": small_gain(c["p"]),
-                "demand": op.demand,
-                "section": op.section,
-                "equation": op.equation,
+                **_fields(op, "demand", "section", "equation"),
                 "domain_section1_upper": lim1,
                 "domain_section2_upper": lim2,
                 "e_analytic": op.error,
@@ -175,15 +135,8 @@ def grid_rows(cases: list[Case]) -> tuple[dict[str, float], list[dict[str, Any]]
         scale = max(abs(op.error), abs(c["g"])) if op.exists else np.nan
         rows.append(
             {
-                "plant": c["plant"],
-                "controller": c["controller"],
-                "g": c["g"],
-                "g_slope": c["g_slope"],
-                "f": c["f"],
-                "f_slope": c["f_slope"],
-                "section": op.section,
-                "channel": op.channel,
-                "equation": op.equation,
+                **_fields(c, "plant", "controller", "g", "g_slope", "f", "f_slope"),
+                **_fields(op, "section", "channel", "equation"),
                 "e_analytic": op.error,
                 "e_simulated": float(c["e_sim"]),
                 "steady_state_analytic": bool(op.exists),
@@ -215,11 +168,12 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         **{f"pi_mds_{plant}_{k}": gains[(plant, "PI")][k] for plant in PLANTS for k in ("kp", "ki")},
     }
     m_paper, paper = paper_rows(cfg, cases)
-    fig6 = {c["controller"]: c for c in cases if c["kind"] == "fig6"}
-    for label, key in (("linear PI", "linear_pi"), ("fuzzy PI", "fuzzy_pi")):
+    sim = ("settling", "overshoot", "e_sim")
+    fig6 = [{"controller": c["controller"], **{k: float(c[k]) for k in sim}} for c in cases if c["kind"] == "fig6"]
+    for r in fig6:  # "linear PI" → fig6_settling_linear_pi, fig6_overshoot_linear_pi, fig6_ess_linear_pi
+        key = r["controller"].lower().replace(" ", "_")
         metrics |= {
-            f"fig6_{q}_{key}": float(fig6[label][k])
-            for q, k in (("settling", "settling"), ("overshoot", "overshoot"), ("ess", "e_sim"))
+            f"fig6_{q}_{key}": r[k] for q, k in (("settling", "settling"), ("overshoot", "overshoot"), ("ess", "e_sim"))
         }
     m_grid, grid = grid_rows(cases)
 
@@ -245,32 +199,26 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         "fig2_mamdani_rms_to_paper_fc": float(np.sqrt(fit_stage.result.loss)),
     }
 
-    fuzzy_pi_p, fuzzy_pi_i = channels(cfg, gains, "astatic", "fuzzy PI")
+    pi_p, pi_i = (
+        tuple(round(float(v), 4) for v in (c.a, c.b, c.c, c.d)) for c in channels(cfg, gains, "astatic", "fuzzy PI")
+    )
     notes = [
         f"simulation: RK4, dt = controller period = {cfg.dt} s, horizon {cfg.t_final} s; "
         f"steady state = last sample; no steady state = drift over the last {cfg.drift_window} s above rtol "
         f"{cfg.drift_rtol}",
         "settling time: 2 % band around the final output (python-control's definition), overshoot in %",
-        "fuzzy PI (astatic) channels: P (a, b, c, d) = "
-        f"{tuple(round(float(v), 4) for v in (fuzzy_pi_p.a, fuzzy_pi_p.b, fuzzy_pi_p.c, fuzzy_pi_p.d))}, "
-        f"I = {tuple(round(float(v), 4) for v in (fuzzy_pi_i.a, fuzzy_pi_i.b, fuzzy_pi_i.c, fuzzy_pi_i.d))}",
+        f"fuzzy PI (astatic) channels: P (a, b, c, d) = {pi_p}, I = {pi_i}",
     ]
     tables = {
         "paper_cases": paper,
         "steady_state_grid": grid,
         "fig6_pi": [
-            {
-                "controller": k,
-                "settling_time_2pct_s": float(v["settling"]),
-                "overshoot_pct": float(v["overshoot"]),
-                "e_final": float(v["e_sim"]),
-            }
-            for k, v in fig6.items()
+            dict(zip(("controller", "settling_time_2pct_s", "overshoot_pct", "e_final"), r.values())) for r in fig6
         ],
     }
     own = stages.Stage(
         tables=tables,
-        figures=paper_figures(cfg, cases, gains, e, u_mamdani, fit) | {"steady_state_grid": _plot_grid(grid)},
+        figures=paper_figures(cfg, cases, gains, e, u_mamdani, fit) | {"steady_state_grid": grid_figure(grid)},
     )
     return stages.merge(own, fit_stage, metrics=metrics, notes=notes)
 
@@ -282,135 +230,82 @@ def paper_figures(cfg: Config, cases: list[Case], gains: dict, e: Any, u_mamdani
     """Figs. 2–6 of the paper, as :func:`figures.line_panels`."""
     kmds, e2 = gains[("static", "P")]["kp"], np.linspace(0, 2.0, 401)
     fc1, fc2 = fz.three_section(*cfg.fc1_static), fz.three_section(*cfg.fc_static)
-    fig2 = figures.line_panels(
-        [
-            {
-                "lines": {
-                    "1: Mamdani FC (centroid)": (e, u_mamdani),
-                    "2: three-section fit a={:.3f} b={:.3f} c={:.3f} d={:.3f}".format(*fit.abcd): (
-                        e,
-                        _evaluate(fit.params, e),
-                        "--",
-                    ),
-                    "paper's FC (0.75, 0.3, 1.2, 1)": (e, _evaluate(fc2, e), ":"),
-                    "linear K_mds·e": (e, kmds * np.asarray(e)),
-                },
-                "x_label": "e",
-                "y_label": "u",
-                "ylim": (-1.4, 1.4),
-                "title": "Fig. 2: static characteristic of the FC and its approximation",
-            }
-        ]
-    )
-    pick = {
-        c["controller"] if c["kind"] == "fig3" else ("FC2" if c["controller"] == "fuzzy P" else "K_mds"): c
+    fig2 = {
+        "1: Mamdani FC (centroid)": (e, u_mamdani),
+        "2: three-section fit a={:.3f} b={:.3f} c={:.3f} d={:.3f}".format(*fit.abcd): (
+            e,
+            _evaluate(fit.params, e),
+            "--",
+        ),
+        "paper's FC (0.75, 0.3, 1.2, 1)": (e, _evaluate(fc2, e), ":"),
+        "linear K_mds·e": (e, kmds * np.asarray(e)),
+    }
+    fig2_title = "Fig. 2: static characteristic of the FC and its approximation"
+    chars = {
+        f"FC1 (K1 = {small_gain(fc1):.2f})": (e2, _evaluate(fc1, e2)),
+        f"FC2 (K1 = {small_gain(fc2):.2f})": (e2, _evaluate(fc2, e2)),
+        f"K_mds = {kmds:.3g}": (e2, kmds * e2, "k--"),
+    }
+    pick = {  # the paper's FC (FC2) and K_mds: the static f = 0 cases
+        "FC2" if c["controller"] == "fuzzy P" else "K_mds" if c["kind"] == "paper" else c["controller"]: c
         for c in cases
         if c["kind"] == "fig3" or (c["kind"] == "paper" and c["plant"] == "static" and c["f"] == 0.0)
     }
-    fig3 = figures.line_panels(
-        [
-            {
-                "lines": {
-                    f"FC1 (K1 = {small_gain(fc1):.2f})": (e2, _evaluate(fc1, e2)),
-                    f"FC2 (K1 = {small_gain(fc2):.2f})": (e2, _evaluate(fc2, e2)),
-                    f"K_mds = {kmds:.3g}": (e2, kmds * e2, "k--"),
-                },
-                "x_label": "e",
-                "y_label": "u",
-                "ylim": (0, 1.3),
-                "title": "(a) static characteristics",
-            },
-            {
-                "lines": {
-                    f"{k}: e(∞) = {float(pick[k]['e_sim']):.4f}": (pick[k]["t"], pick[k]["y"])
-                    for k in ("FC1", "FC2", "K_mds")
-                },
-                "x_label": "t, s",
-                "y_label": "y",
-                "xlim": (0, 3),
-                "title": "(b) transients, static plant, g = 1, f = 0",
-            },
-        ],
-        title="Fig. 3 (FC1 assumed)",
-    )
-    out = {"fig2_static_characteristic": fig2, "fig3_fc1_fc2_kmds": fig3}
-    for plant, name, fig in (
-        ("static", "fig4_static_transients", "Fig. 4"),
-        ("astatic", "fig5_astatic_transients", "Fig. 5"),
-    ):
-        sel = [c for c in cases if c["kind"] == "paper" and c["plant"] == plant]
-        out[name] = figures.line_panels(
+    fig3 = {
+        f"{k}: e(∞) = {float(c['e_sim']):.4f}": (c["t"], c["y"])
+        for k, c in ((k, pick[k]) for k in ("FC1", "FC2", "K_mds"))
+    }
+    out = {
+        "fig2_static_characteristic": figures.line_panels(
+            [figures.panel(fig2, "e", "u", ylim=(-1.4, 1.4), title=fig2_title)]
+        ),
+        "fig3_fc1_fc2_kmds": figures.line_panels(
             [
-                {
-                    "lines": {
-                        f"{c['controller']}: e(∞) = {float(c['e_sim']):.4f}, t_s = {float(c['settling']):.3f} s, "
-                        f"σ = {float(c['overshoot']):.2f} %": (c["t"], c["y"])
-                        for c in sel
-                        if c["f"] == f
-                    },
-                    "x_label": "t, s",
-                    "y_label": "y",
-                    "xlim": (0, 3),
-                    "hline": 1.0,
-                    "title": f"f = {f}",
-                }
-                for f in sorted({c["f"] for c in sel})
+                figures.panel(chars, "e", "u", ylim=(0, 1.3), title="(a) static characteristics"),
+                figures.panel(fig3, "t, s", "y", xlim=(0, 3), title="(b) transients, static plant, g = 1, f = 0"),
             ],
-            title=f"{fig}: {plant} plant, g = 1",
+            title="Fig. 3 (FC1 assumed)",
+        ),
+    }
+    for plant, name, fig in (("static", "fig4_static_transients", 4), ("astatic", "fig5_astatic_transients", 5)):
+        sel = [c for c in cases if c["kind"] == "paper" and c["plant"] == plant]
+        lines = {
+            f: {_transient_label(c): (c["t"], c["y"]) for c in sel if c["f"] == f}
+            for f in sorted({c["f"] for c in sel})
+        }
+        out[name] = figures.line_panels(
+            [figures.panel(v, "t, s", "y", xlim=(0, 3), hline=1.0, title=f"f = {f}") for f, v in lines.items()],
+            title=f"Fig. {fig}: {plant} plant, g = 1",
         )
     fig6 = {c["controller"]: c for c in cases if c["kind"] == "fig6"}
+    y = {_transient_label(c, e_final=False): (c["t"], c["y"]) for c in fig6.values()}
+    abs_e = {k: (c["t"], np.abs(1.0 - c["y"]) + 1e-16) for k, c in fig6.items()}
     out["fig6_pi_astatic"] = figures.line_panels(
         [
-            {
-                "lines": {
-                    f"{k}: t_s = {float(c['settling']):.3f} s, σ = {float(c['overshoot']):.2f} %": (c["t"], c["y"])
-                    for k, c in fig6.items()
-                },
-                "x_label": "t, s",
-                "y_label": "y",
-                "xlim": (0, 5),
-                "hline": 1.0,
-            },
-            {
-                "lines": {k: (c["t"], np.abs(1.0 - c["y"]) + 1e-16) for k, c in fig6.items()},
-                "x_label": "t, s",
-                "y_label": "|e(t)|",
-                "xlim": (0, 8),
-                "ylim": (1e-8, 2),
-                "log_y": True,
-            },
+            figures.panel(y, "t, s", "y", xlim=(0, 5), hline=1.0),
+            figures.panel(abs_e, "t, s", "|e(t)|", xlim=(0, 8), ylim=(1e-8, 2), log_y=True),
         ],
         title=f"Fig. 6: astatic plant, PI at maximum stability vs fuzzy PI (g = 1, f = {cfg.fig6_f})",
     )
     return out
 
 
-def _plot_grid(rows: list[dict[str, Any]]):
-    plt = figures._plt()
-    fig, ax = plt.subplots(figsize=(6.5, 5))
-    for k, ctrl in enumerate(CONTROLLERS):
-        sel = [r for r in rows if r["controller"] == ctrl and r["steady_state_analytic"]]
-        ax.scatter(
-            [r["e_analytic"] for r in sel],
-            [r["e_simulated"] for r in sel],
-            marker="os^D"[k],
-            facecolors="none",
-            edgecolors=f"C{k}",
-            label=ctrl,
-        )
-    lim = max(abs(r["e_analytic"]) for r in rows if r["steady_state_analytic"]) * 1.1
-    ax.plot([-lim, lim], [-lim, lim], "k-", lw=0.6)
-    n_none = sum(not r["steady_state_analytic"] for r in rows)
-    n_det = sum((not r["steady_state_analytic"]) and (not r["steady_state_simulated"]) for r in rows)
-    ax.set(
-        title=f"steady-state error: analytic vs simulated\n(no steady state: {n_det}/{n_none} detected)",
-        xlabel="analytic e(∞)",
-        ylabel="simulated e(T)",
-    )
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    return fig
+def _transient_label(c: Case, e_final: bool = True) -> str:
+    e = f"e(∞) = {float(c['e_sim']):.4f}, " if e_final else ""
+    return f"{c['controller']}: {e}t_s = {float(c['settling']):.3f} s, σ = {float(c['overshoot']):.2f} %"
+
+
+def grid_figure(rows: list[dict[str, Any]]):
+    """Analytic vs simulated steady-state error of the grid cases that have one, per controller."""
+    finite = [r for r in rows if r["steady_state_analytic"]]
+    none = [r for r in rows if not r["steady_state_analytic"]]
+    points = {
+        ctrl: tuple([r[k] for r in finite if r["controller"] == ctrl] for k in ("e_analytic", "e_simulated"))
+        for ctrl in CONTROLLERS
+    }
+    n_det = sum(not r["steady_state_simulated"] for r in none)
+    title = f"steady-state error: analytic vs simulated\n(no steady state: {n_det}/{len(none)} detected)"
+    return figures.parity(points, x_label="analytic e(∞)", y_label="simulated e(T)", title=title)
 
 
 STUDY = Study(

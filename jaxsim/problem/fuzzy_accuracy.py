@@ -20,6 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxsim.control import fuzzy as fz
+from jaxsim.control.fuzzy_steady_state import steady_state_error
 from jaxsim.control.stability_degree import max_stability_degree
 from jaxsim.core.metrics import steady_state, step_info
 from jaxsim.core.rollout import ClosedLoop, Timing, simulate
@@ -90,6 +91,11 @@ def channels(cfg: AccuracySetup, gains: dict, plant: str, controller: str) -> tu
     return p, i
 
 
+def plant_gain(cfg: AccuracySetup, plant: str) -> float:
+    """The gain ``K`` of the static or astatic plant."""
+    return cfg.K_static if plant == "static" else cfg.K_astatic
+
+
 def _plant(cfg: AccuracySetup, name: str):
     if name == "static":
         return static_plant(StaticParams(cfg.K_static, cfg.T1, cfg.T2))
@@ -102,6 +108,39 @@ def _plant(cfg: AccuracySetup, name: str):
 
 class Case(dict):
     """One simulation: plant, controller label, channel characteristics and the input signals."""
+
+
+def make_case(
+    kind: str,
+    plant: str,
+    controller: str,
+    chars: tuple[Any, Any],
+    g: float,
+    f: float,
+    g_slope: float = 0.0,
+    f_slope: float = 0.0,
+) -> Case:
+    """A :class:`Case` of ``plant`` (``"static"``/``"astatic"``) with channel characteristics ``chars =
+    (p, i)`` (``i`` None for a P controller), reference ``g + g_slope·t`` and disturbance ``f + f_slope·t``;
+    ``kind`` groups cases for reporting."""
+    p, i = chars
+    return Case(kind=kind, plant=plant, controller=controller, p=p, i=i, g=g, g_slope=g_slope, f=f, f_slope=f_slope)
+
+
+def with_steady_states(cfg: AccuracySetup, cases: list[Case]) -> list[Case]:
+    """``cases``, each with ``op``: its analytic :class:`~jaxsim.control.fuzzy_steady_state.OperatingPoint`."""
+    for c in cases:
+        c["op"] = steady_state_error(
+            c["plant"],
+            plant_gain(cfg, c["plant"]),
+            c["p"],
+            c["i"],
+            g=c["g"],
+            g_slope=c["g_slope"],
+            f=c["f"],
+            f_slope=c["f_slope"],
+        )
+    return cases
 
 
 def _stack(trees: list) -> Any:
