@@ -12,6 +12,8 @@
 * :func:`median_over_seeds` — a stochastic tuner repeated over seeds, represented by its median run,
   every run in a per-seed table (with its best loss within a reference number of simulations);
 * :func:`merge` — stages (and extra metrics/notes) into one :class:`~experiments.study.StudyResult`.
+* :func:`event_rows` — Monte-Carlo event probabilities over a grid with Wilson intervals, as table rows;
+* :func:`series_rows` — time series as table rows; :func:`band_claims` — claims on values read off a figure.
 
 Metric names: ``loss_<tuner>``, ``sims_<tuner>``, ``wall_s_<tuner>``, ``loss_at_common_sims_<tuner>``,
 ``loss_at_common_seconds_<tuner>``, ``converged_<tuner>`` (1/0), ``gap_to_<ref>_<tuner>``;
@@ -32,6 +34,7 @@ import numpy as np
 
 import jaxsim.montecarlo as mc
 from experiments import figures
+from experiments.runner import Claim
 from experiments.study import StudyResult
 from jaxsim.core.metrics import step_info
 from optim.compare import Comparison, Curve, best_within, compare, comparison_metrics
@@ -356,3 +359,50 @@ def merge(
     out.metrics.update(metrics or {})
     out.notes.extend(notes)
     return out
+
+
+def event_rows(
+    result: Any,
+    events: dict[str, str],
+    x: Sequence[float],
+    *,
+    x_name: str,
+    label: str = "event",
+    p_name: str = "p",
+    level: float = 0.95,
+) -> list[dict[str, Any]]:
+    """Probabilities of Monte-Carlo events over a grid, with their Wilson intervals: one row per
+    ``events[name]`` (an event of ``result`` with one probability per grid point ``x``) and grid point,
+    ``{label: name, x_name: x, p_name: p, "wilson_low", "wilson_high", "runs"}``."""
+    rows = []
+    for name, event in events.items():
+        stats = result[event]
+        lo, hi = stats.interval(level)
+        rows += [
+            {
+                label: name,
+                x_name: xi,
+                p_name: float(stats.probability[i]),
+                "wilson_low": float(lo[i]),
+                "wilson_high": float(hi[i]),
+                "runs": result.runs,
+            }
+            for i, xi in enumerate(x)
+        ]
+    return rows
+
+
+def series_rows(t: Any, columns: dict[str, Any], t_name: str = "t_s") -> list[dict[str, float]]:
+    """A table of time series: one row per sample of ``t`` with ``t_name`` and every ``columns[name][i]``."""
+    return [{t_name: float(ti), **{k: float(v[i]) for k, v in columns.items()}} for i, ti in enumerate(t)]
+
+
+def band_claims(targets: dict[str, Any], rel: float, source: str) -> list[Claim]:
+    """Claims on values read off a figure: ``targets[metric]`` is a value or a ``(lo, hi)`` range,
+    reproduced within ``[(1 − rel)·lo, (1 + rel)·hi]``; the claim's ``paper`` is ``lo``, a range is noted."""
+    claims = []
+    for metric, target in targets.items():
+        lo, hi = (target, target) if np.isscalar(target) else target
+        note = "" if lo == hi else f"paper: {lo:g}–{hi:g}"
+        claims.append(Claim(metric, paper=lo, band=((1 - rel) * lo, (1 + rel) * hi), source=source, note=note))
+    return claims

@@ -22,24 +22,25 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 import optax
 
 import jaxsim.montecarlo as mc
 from experiments import figures, stages
-from experiments.runner import Claim, PerRun, Study, StudyResult, paper_facts
-from jaxsim.plants.radar import radar, scan_times
+from experiments.runner import PerRun, Study, StudyResult, paper_facts
 from jaxsim.problem.vessel_tracking import (
     BASE_TRACKERS,
     TrackingSetup,
+    check_setup,
+    envelope_means,
     envelope_metric,
     loss_metric,
+    loss_run,
     loss_space,
     nominal_params,
     paper_selector,
     selector_problem,
-    simulate,
+    single_runs,
     with_memberships,
 )
 
@@ -74,65 +75,17 @@ def envelope_name(stem: str, speed: float) -> str:
     return {"max_turn": f"max_err_turn_{tag}_m", "window_turn": f"window_turn_{tag}"}.get(stem, f"env_{stem}_{tag}")
 
 
-def _claim(stem: str, speed: float, target: Any) -> Claim:
-    lo, hi = (target, target) if np.isscalar(target) else target
-    return Claim(
-        envelope_name(stem, speed),
-        paper=lo,
-        band=(0.7 * lo, 1.3 * hi),
-        source=SOURCE,
-        note="" if lo == hi else f"paper: {lo:g}–{hi:g}",
-    )
-
-
 PAPER = {stem: paper for stem, _, _, paper in ENVELOPE}
-CLAIMS = [_claim(stem, v, paper[v]) for stem, _, _, paper in ENVELOPE for v in (10, 20)]
-
+CLAIMS = stages.band_claims(
+    {envelope_name(stem, v): paper[v] for stem, _, _, paper in ENVELOPE for v in (10, 20)}, 0.3, SOURCE
+)
+CLAIM = {c.metric: c for c in CLAIMS}
 _, ASSUMPTIONS = paper_facts("vessel_tracking")
 
 
 def per_run(cfg: Config) -> PerRun:
     """One track-loss run (speed and turn start drawn as in the study) for ``experiments sweep``."""
-    space = loss_space(cfg)
-    return PerRun(
-        loss_metric(cfg, {"fuzzy": paper_selector(cfg)}),
-        nominal_params(cfg),
-        {k: space[k] for k in ("speed", "turn_start")},
-    )
-
-
-def envelope_sweep(cfg: Config, progress: Callable[..., Any]) -> Any:
-    """Monte Carlo of the reproduction statistics at each of ``cfg.speeds`` (common random numbers)."""
-    design = mc.points(["speed"], np.asarray(cfg.speeds, float)[:, None])
-    return mc.sweep(
-        envelope_metric(cfg),
-        nominal_params(cfg),
-        design,
-        cfg.envelope_runs,
-        cfg.seed,
-        block_size=min(1000, cfg.envelope_runs),
-        progress=progress,
-        name="vessel_tracking.envelope",
-    )
-
-
-def loss_monte_carlo(
-    cfg: Config, selectors: dict[str, Any], runs: int, progress: Callable[..., Any] | None = None, keep_runs: int = 0
-) -> Any:
-    """``lost/<tracker>`` events ``(G,)`` over ``cfg.gates`` and ``max_miss/<tracker>`` for ``runs`` runs."""
-    for g in cfg.gates:
-        if not (np.isfinite(g) and g > 0):
-            raise ValueError(f"gates: every gate width must be > 0 m, got {cfg.gates!r}")
-    return mc.monte_carlo(
-        loss_metric(cfg, selectors, cfg.gates),
-        loss_space(cfg),
-        runs,
-        cfg.seed + 1,
-        block_size=min(1000, runs),
-        keep_runs=keep_runs,
-        progress=progress,
-        name="vessel_tracking.loss",
-    )
+    return PerRun(*loss_run(cfg))
 
 
 def envelope(cfg: Config, env: Any) -> tuple[dict[str, float], list[dict[str, Any]]]:
@@ -144,7 +97,6 @@ def envelope(cfg: Config, env: Any) -> tuple[dict[str, float], list[dict[str, An
             name = envelope_name(stem, speed)
             metrics[name] = float(s.mean)
             target = paper.get(int(speed), np.nan)
-            verdict = _claim(stem, speed, target).verdict(metrics[name]) if int(speed) in paper else "differs"
             rows.append(
                 {
                     "quantity": quantity,
@@ -154,7 +106,7 @@ def envelope(cfg: Config, env: Any) -> tuple[dict[str, float], list[dict[str, An
                     "mc_mean": metrics[name],
                     "single_run_p05": float(s.quantile(0.05)),
                     "single_run_p95": float(s.quantile(0.95)),
-                    "within_30pct": verdict == "reproduced",
+                    "within_30pct": name in CLAIM and CLAIM[name].verdict(metrics[name]) == "reproduced",
                 }
             )
     return metrics, rows
@@ -167,28 +119,14 @@ def _target_str(target: Any) -> str:
 def loss_tables(cfg: Config, env: Any, loss: Any, names: tuple[str, ...]) -> tuple[list, list]:
     """Per tracker: the comparison row (loss probability at the default gate with its Wilson 95 %
     interval, miss distances, errors) and the loss-vs-gate rows."""
-    gi = list(cfg.gates).index(cfg.gate)
-    comparison, curve = [], []
+    events = {name: f"lost/{name}" for name in names}
+    curve = stages.event_rows(loss, events, cfg.gates, x_name="gate_m", label="tracker", p_name="p_loss")
+    comparison = []
     for name in names:
-        ev = loss[f"lost/{name}"]
-        lo, hi = ev.interval(0.95)
-        curve += [
-            {
-                "tracker": name,
-                "gate_m": g,
-                "p_loss": float(ev.probability[i]),
-                "wilson_low": float(lo[i]),
-                "wilson_high": float(hi[i]),
-                "runs": loss.runs,
-            }
-            for i, g in enumerate(cfg.gates)
-        ]
-        row = {
-            **curve[gi - len(cfg.gates)],
-            "max_miss_mean_m": float(loss[f"max_miss/{name}"].mean),
-            "max_miss_p95_m": float(loss[f"max_miss/{name}"].quantile(0.95)),
-        }
-        del row["runs"]
+        row = next(r for r in curve if r["tracker"] == name and r["gate_m"] == cfg.gate)
+        row = {k: v for k, v in row.items() if k != "runs"}
+        row["max_miss_mean_m"] = float(loss[f"max_miss/{name}"].mean)
+        row["max_miss_p95_m"] = float(loss[f"max_miss/{name}"].quantile(0.95))
         for speed, res in zip(cfg.speeds, env.points):
             if f"rms_straight/{name}" in res.by_name:
                 row[f"rms_straight_{int(speed)}ms_m"] = float(res[f"rms_straight/{name}"].mean)
@@ -199,28 +137,16 @@ def loss_tables(cfg: Config, env: Any, loss: Any, names: tuple[str, ...]) -> tup
 
 def sensitivity_rows(cfg: Config, key: jax.Array, runs: int) -> list[dict[str, Any]]:
     """Envelope under the alternatives named in ASSUMPTIONS (κ = 1, min t-norm), small batches."""
-    rows = []
-    for label, change in (
-        ("paper defaults (κ = 2.17, product)", {}),
-        ("κ = 1 (σ̂ = raw mean)", {"kappa": 1.0}),
-        ("min t-norm", {"tnorm": "min"}),
-    ):
-        c = dataclasses.replace(cfg, **change)
-        metric = jax.jit(jax.vmap(envelope_metric(c), in_axes=(0, None)))
-        for speed in cfg.speeds:
-            out = metric(jax.random.split(key, runs), {**nominal_params(c), "speed": speed})
-            rows.append(
-                {
-                    "variant": label,
-                    "speed_ms": speed,
-                    "runs": runs,
-                    "sigma_final_m": float(jnp.mean(out["sigma_final"])),
-                    "window_turn_median": float(jnp.mean(out["window_turn_median"])),
-                    "max_turn_m": float(jnp.mean(out["max_turn"]["fuzzy"])),
-                    "max_straight_m": float(jnp.mean(out["max_straight"]["fuzzy"])),
-                }
-            )
-    return rows
+    variants = {
+        "paper defaults (κ = 2.17, product)": {},
+        "κ = 1 (σ̂ = raw mean)": {"kappa": 1.0},
+        "min t-norm": {"tnorm": "min"},
+    }
+    return [
+        {"variant": label, "speed_ms": speed, "runs": runs, **means}
+        for label, change in variants.items()
+        for speed, means in zip(cfg.speeds, envelope_means(dataclasses.replace(cfg, **change), key, runs))
+    ]
 
 
 def _pair(values: Any, fmt: str = ".0f") -> str:
@@ -259,23 +185,22 @@ def normalisation_note(kappa: float, metrics: dict[str, Any], sensitivity: list[
 def _figures(cfg: Config, env: Any, singles: list) -> dict[str, Any]:
     """Error vs time (MC means and one run) and the selected window and σ̂, per speed."""
     plt = figures._plt()
-    times, n = scan_times(radar(period=cfg.scan_period), cfg.t_final), len(cfg.speeds)
+    times, n = singles[0][0].times, len(cfg.speeds)
+    paper_line = {"color": "r", "ls": "--", "lw": 0.8}
     fig1, ax1 = plt.subplots(1, n, figsize=(6 * n, 4), sharey=True, squeeze=False)
     fig2, ax2 = plt.subplots(2, n, figsize=(6 * n, 6), sharex=True, squeeze=False)
     for i, (speed, res, (sc, single)) in enumerate(zip(cfg.speeds, env.points, singles)):
         for name in BASE_TRACKERS:
             ax1[0, i].plot(times, res[f"err/{name}"].mean, label=f"{name} (MC mean)")
         ax1[0, i].plot(times, single["err"]["fuzzy"], "k:", label="fuzzy, one run")
-        ax1[0, i].axhline(
-            PAPER["max_turn"].get(int(speed), np.nan), color="r", ls="--", lw=0.8, label="paper's turn peak"
-        )
+        ax1[0, i].axhline(PAPER["max_turn"].get(int(speed), np.nan), **paper_line, label="paper's turn peak")
         ax1[0, i].set(title=f"{speed:g} m/s: position error ε", xlabel="t, s", ylabel="ε, m")
         ax2[0, i].step(times, single["window"], where="post", label="one run")
         ax2[0, i].plot(times, res["window"].mean, label="MC mean")
         ax2[0, i].set(title=f"{speed:g} m/s: selected window m", ylabel="m, scans", ylim=(1.5, cfg.max_window + 0.5))
         ax2[1, i].plot(times, single["sigma_hat"], label="one run")
         ax2[1, i].plot(times, res["sigma_hat"].mean, label="MC mean")
-        ax2[1, i].axhline(PAPER["sigma_final"][10], color="r", ls="--", lw=0.8, label="paper ≈ 10 m")
+        ax2[1, i].axhline(PAPER["sigma_final"][10], **paper_line, label="paper ≈ 10 m")
         ax2[1, i].set(title="noise-scale estimate σ̂", xlabel="t, s", ylabel="σ̂, m")
         for ax in (ax1[0, i], ax2[0, i], ax2[1, i]):
             ax.axvspan(float(sc.turn_start), float(sc.turn_end), color="0.9")
@@ -284,20 +209,22 @@ def _figures(cfg: Config, env: Any, singles: list) -> dict[str, Any]:
 
 
 def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
-    if cfg.scan_period <= 0:
-        raise ValueError(f"scan_period: must be > 0 s, got {cfg.scan_period!r}")
-    if cfg.gate <= 0 or cfg.gate not in cfg.gates:
-        raise ValueError(f"gate: must be > 0 m and one of gates {cfg.gates}, got {cfg.gate!r}")
+    check_setup(cfg)
     k_single, k_tune, k_sens = jax.random.split(jax.random.PRNGKey(cfg.seed), 3)
     sel0 = paper_selector(cfg)
 
-    t0 = time.perf_counter()
-    env = envelope_sweep(cfg, progress)
-    one = jax.jit(envelope_metric(cfg))
-    singles = [
-        (simulate(cfg, k_single, p), jax.tree_util.tree_map(np.asarray, one(k_single, p)))
-        for p in ({**nominal_params(cfg), "speed": v} for v in cfg.speeds)
-    ]
+    t0 = time.perf_counter()  # the reproduction statistics at each speed, common random numbers
+    env = mc.sweep(
+        envelope_metric(cfg),
+        nominal_params(cfg),
+        mc.points(["speed"], np.asarray(cfg.speeds, float)[:, None]),
+        cfg.envelope_runs,
+        cfg.seed,
+        block_size=min(1000, cfg.envelope_runs),
+        progress=progress,
+        name="vessel_tracking.envelope",
+    )
+    singles = single_runs(cfg, k_single)
     env_s = time.perf_counter() - t0
 
     problem, exact = selector_problem(cfg, k_tune, cfg.tune_runs)
@@ -317,17 +244,23 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         "steps": res.n_steps,
         "surrogate_initial": float(res.history.loss[0]),
         "surrogate_tuned": res.loss,
-        "exact_initial_train": float(exact(sel0)),
-        "exact_tuned_train": float(exact(tuned)),
+        **{f"exact_{k}_train": float(exact(s)) for k, s in (("initial", sel0), ("tuned", tuned))},
         "wall_s": res.wall_s,
         "compile_s": res.compile_s,
-        "slopes": [round(float(v), 3) for v in tuned.slopes],
-        "centres": [round(float(v), 3) for v in tuned.centres],
+        **{k: [round(float(v), 3) for v in getattr(tuned, k)] for k in ("slopes", "centres")},
     }
 
     names = BASE_TRACKERS + ("fuzzy_tuned",)
-    t0 = time.perf_counter()
-    loss = loss_monte_carlo(cfg, {"fuzzy": sel0, "fuzzy_tuned": tuned}, cfg.runs, progress)
+    t0 = time.perf_counter()  # lost/<tracker> (G,) over cfg.gates and max_miss/<tracker>, common random numbers
+    loss = mc.monte_carlo(
+        loss_metric(cfg, {"fuzzy": sel0, "fuzzy_tuned": tuned}, cfg.gates),
+        loss_space(cfg),
+        cfg.runs,
+        cfg.seed + 1,
+        block_size=min(1000, cfg.runs),
+        progress=progress,
+        name="vessel_tracking.loss",
+    )
     loss_s = time.perf_counter() - t0
 
     env_metrics, rows = envelope(cfg, env)
@@ -341,11 +274,8 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         "window_straight_median": mean_over("window_straight_median"),
         "sigma_hat_final_m": mean_over("sigma_final"),
         "sigma_settle_scans": mean_over("sigma_settle_scan"),
-        **{
-            f"p_loss_{n}{suffix}": by[n][col]
-            for n in names
-            for suffix, col in (("", "p_loss"), ("_wilson_low", "wilson_low"), ("_wilson_high", "wilson_high"))
-        },
+        **{f"p_loss_{n}": by[n]["p_loss"] for n in names},
+        **{f"p_loss_{n}_{c}": by[n][c] for n in names for c in ("wilson_low", "wilson_high")},
         "gate_m": cfg.gate,
         "envelope_within_30pct": int(sum(r["within_30pct"] for r in rows)),
         "envelope_checks": len(rows),
@@ -360,22 +290,11 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         "comparison": comparison,
         "track_loss": curve,
         "tuning": [tune_row],
-        "single_run": [
-            {
-                "t_s": float(t),
-                **{
-                    f"{q}_{int(v)}ms": float(s[q][i])
-                    for v, (_, s) in zip(cfg.speeds, singles)
-                    for q in ("window", "sigma_hat")
-                },
-                **{
-                    f"err_{n}_{int(v)}ms": float(s["err"][n][i])
-                    for v, (_, s) in zip(cfg.speeds, singles)
-                    for n in BASE_TRACKERS
-                },
-            }
-            for i, t in enumerate(singles[0][0].times)
-        ],
+        "single_run": stages.series_rows(
+            singles[0][0].times,
+            {f"{q}_{int(v)}ms": s[q] for v, (_, s) in zip(cfg.speeds, singles) for q in ("window", "sigma_hat")}
+            | {f"err_{n}_{int(v)}ms": s["err"][n] for v, (_, s) in zip(cfg.speeds, singles) for n in BASE_TRACKERS},
+        ),
     }
     if cfg.sensitivity_runs:
         tables["sensitivity"] = sensitivity_rows(cfg, k_sens, cfg.sensitivity_runs)

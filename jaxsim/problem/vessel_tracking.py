@@ -98,6 +98,16 @@ class RadarRun(NamedTuple):
     R: jax.Array
 
 
+def check_setup(cfg: TrackingSetup) -> None:
+    """``ValueError`` unless the scan period and every gate width are > 0 and ``gate`` is one of ``gates``."""
+    if cfg.scan_period <= 0:
+        raise ValueError(f"scan_period: must be > 0 s, got {cfg.scan_period!r}")
+    if cfg.gate <= 0 or cfg.gate not in cfg.gates:
+        raise ValueError(f"gate: must be > 0 m and one of gates {cfg.gates}, got {cfg.gate!r}")
+    if not all(np.isfinite(g) and g > 0 for g in cfg.gates):
+        raise ValueError(f"gates: every gate width must be > 0 m, got {cfg.gates!r}")
+
+
 def nominal_params(cfg: TrackingSetup) -> dict[str, float]:
     """Every parameter a sweep may set (``python -m experiments sweep vessel_tracking --param …``)."""
     return {
@@ -223,6 +233,34 @@ def envelope_metric(cfg: TrackingSetup) -> Callable[[jax.Array, dict[str, Any]],
     return metric
 
 
+def single_runs(cfg: TrackingSetup, key: jax.Array) -> list[tuple[RadarRun, dict[str, Any]]]:
+    """One run per speed of ``cfg.speeds`` with the same ``key``: the run and its
+    :func:`envelope_metric` statistics (NumPy)."""
+    one = jax.jit(envelope_metric(cfg))
+    return [
+        (simulate(cfg, key, p), jax.tree_util.tree_map(np.asarray, one(key, p)))
+        for p in ({**nominal_params(cfg), "speed": v} for v in cfg.speeds)
+    ]
+
+
+def envelope_means(cfg: TrackingSetup, key: jax.Array, runs: int) -> list[dict[str, float]]:
+    """Per speed of ``cfg.speeds``, means over ``runs`` runs (keys split from ``key``) of the fuzzy
+    tracker's final σ̂ (m), median turn window (scans) and error peaks in the turn and on the straight legs (m)."""
+    metric = jax.jit(jax.vmap(envelope_metric(cfg), in_axes=(0, None)))
+    out = []
+    for speed in cfg.speeds:
+        stats = metric(jax.random.split(key, runs), {**nominal_params(cfg), "speed": speed})
+        out.append(
+            {
+                "sigma_final_m": float(jnp.mean(stats["sigma_final"])),
+                "window_turn_median": float(jnp.mean(stats["window_turn_median"])),
+                "max_turn_m": float(jnp.mean(stats["max_turn"]["fuzzy"])),
+                "max_straight_m": float(jnp.mean(stats["max_straight"]["fuzzy"])),
+            }
+        )
+    return out
+
+
 def loss_metric(cfg: TrackingSetup, selectors: dict[str, WindowSelector], gates: Any = None) -> Callable:
     """One run: ``lost/<tracker>`` events at ``params["gate"]`` (or at every one of ``gates``, shape
     ``(G,)``) and ``max_miss/<tracker>``, the largest miss distance over the checked scans."""
@@ -240,6 +278,17 @@ def loss_metric(cfg: TrackingSetup, selectors: dict[str, WindowSelector], gates:
         return out
 
     return metric
+
+
+def loss_run(cfg: TrackingSetup) -> tuple[Callable, dict[str, float], dict[str, Any]]:
+    """One track-loss run of the paper's selector, for a parameter sweep: ``(metric, nominal
+    parameters, the drawn ones)`` — speed and turn start drawn as in :func:`loss_space`."""
+    space = loss_space(cfg)
+    return (
+        loss_metric(cfg, {"fuzzy": paper_selector(cfg)}),
+        nominal_params(cfg),
+        {k: space[k] for k in ("speed", "turn_start")},
+    )
 
 
 def loss_space(cfg: TrackingSetup) -> dict[str, Any]:

@@ -12,7 +12,7 @@ import jaxsim.montecarlo as mc
 from experiments.vessel_tracking import Config
 from jaxsim.estimation.track_loss import miss_distances, track_lost
 from jaxsim.estimation.window_selector import fixed_window, predicted_plots, select_estimates, window_bank_filter
-from jaxsim.problem.vessel_tracking import loss_space, phases, simulate
+from jaxsim.problem.vessel_tracking import check_setup, loss_space, phases, simulate
 from tests.experiments.study_cli import run_quick_study
 
 
@@ -124,3 +124,18 @@ def test_track_loss_monte_carlo_equals_a_direct_loop():
     assert 0 < count[-1] < count[0] <= n  # the gates were chosen so the events are informative
     lo, hi = res["lost"].interval(0.95)
     assert np.all(lo <= count / n) and np.all(count / n <= hi)
+
+
+@pytest.mark.parametrize(
+    "change, match",
+    [
+        ({"scan_period": 0.0}, "scan_period: must be > 0"),
+        ({"gate": 55.0}, "gate: must be > 0 m and one of gates"),
+        ({"gates": (25.0, -1.0, 50.0)}, "gates: every gate width"),
+        ({"gates": (float("nan"), 50.0)}, "gates: every gate width"),
+    ],
+)
+def test_check_setup_names_the_bad_field_before_any_simulation(change, match):
+    check_setup(Config())  # the defaults pass
+    with pytest.raises(ValueError, match=match):
+        check_setup(dataclasses.replace(Config(), **change))
