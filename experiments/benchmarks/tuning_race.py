@@ -32,7 +32,8 @@ and the result's assembly) is charged before the first step, which slightly over
 are ``L* + 1 %·|L*|`` and ``L* + 0.1 %·|L*|``, ``L*`` the lowest loss any run reached (or
 ``--reference``).  Reported: medians over ``--rounds`` rounds (round ``r`` seeds the stochastic
 tuners with key ``seed + r``), how many rounds reached each target, and ratios tuner / ``pso`` of
-the median times (below 1: faster than the swarm; ``inf``: never reached).
+the median times (below 1: faster than the swarm; ``never``: the tuner never got there; ``pso∞``:
+it did and the swarm never did).
 
 Writes ``tuning_race.json`` (settings, machine load, every run, the summary), ``tuning_race.csv``
 (the summary) and ``tuning_race.png`` (best − L* against seconds, round 0, cold solid and warm
@@ -323,7 +324,11 @@ def format_table(rows: list[dict[str, Any]]) -> str:
         def s(x):
             return "never" if not np.isfinite(x) else f"{x:.3g}"
 
-        ratio = f"{s(r.get('ratio_0.001_cold', np.nan))}/{s(r.get('ratio_0.001_warm', np.nan))}"
+        def ratio_of(kind):
+            x = r.get(f"ratio_0.001_{kind}", np.nan)
+            return "pso∞" if x == 0 and np.isfinite(r[f"t_0.001_{kind}_s"]) else s(x)  # pso never got there
+
+        ratio = f"{ratio_of('cold')}/{ratio_of('warm')}"
         lines.append(
             f"{r['problem']:8} {r['tuner']:9} {r['final_loss']:12.6g} {r['compile_s']:8.2f} "
             f"{s(r['t_0.01_cold_s']):>9} {s(r['t_0.001_cold_s']):>10} {s(r['t_0.01_warm_s']):>9} "
