@@ -20,7 +20,7 @@ $(VENV)/.docs: $(VENV)/.core
 	touch $@
 
 $(VENV)/.test: $(VENV)/.core
-	$(PIP) install -e ".[test,mjx,brax]"
+	$(PIP) install -e ".[test,mjx,brax,cmaes]"
 	touch $@
 
 install: $(VENV)/.core

@@ -20,6 +20,7 @@ from jaxsim.problem.reparam import (
     check_domain,
     invert,
 )
+from optim.cmaes import cmaes
 from optim.compare import (
     Comparison,
     Curve,
@@ -29,6 +30,7 @@ from optim.compare import (
     plot_comparison,
     standard_tuners,
 )
+from optim.hybrid import hybrid
 from optim.problems import PIDTuning, rastrigin, rosenbrock, sphere
 from optim.pso import PSOConfig, SwarmState, pso, pso_init, pso_step
 from optim.results import History, SearchHistory, SearchResult, TuneResult
@@ -49,6 +51,8 @@ __all__ = [
     "comparison_metrics",
     "plot_comparison",
     "standard_tuners",
+    "cmaes",
+    "hybrid",
     "PIDTuning",
     "rastrigin",
     "rosenbrock",

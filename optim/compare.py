@@ -24,7 +24,7 @@ import optax
 
 from jaxsim.problem import Problem
 
-STANDARD_TUNERS = ("gradient", "pso", "random", "grid")
+STANDARD_TUNERS = ("gradient", "pso", "random", "grid", "cmaes", "hybrid")
 
 
 class Curve(NamedTuple):
@@ -88,13 +88,29 @@ def standard_tuners(
       ``budget // (n_starts·S)`` steps (``S`` = scenarios per loss evaluation);
     * ``pso``: :func:`optim.pso`, ``n_particles`` particles, ``budget // (n_particles·S)`` iterations;
     * ``random``: :func:`optim.random_search`, ``budget // S`` points (batches of ``batch_size``);
-    * ``grid``: :func:`optim.grid_search`, ``⌊(budget/S)^{1/d}⌋`` points per dimension.
+    * ``grid``: :func:`optim.grid_search`, ``⌊(budget/S)^{1/d}⌋`` points per dimension;
+    * ``cmaes``: :func:`optim.cmaes.cmaes` (the ``cmaes`` extra), ``n_particles`` candidates,
+      ``budget // (n_particles·S)`` generations;
+    * ``hybrid``: :func:`optim.hybrid.hybrid`, a swarm of ``n_particles`` for a quarter of the
+      budget, then at most the rest as L-BFGS steps (stopping at a gradient norm ≤ 1e-9 or after 20
+      steps without improvement); its line search may spend more simulations than steps, and the
+      row reports them all.
 
     ``key``: PRNG key of the gradient starts, the swarm and the random points (default ``PRNGKey(0)``).
     """
     from optim.pso import pso
     from optim.search import grid_search, random_search
     from optim.tune import tune
+
+    def _cmaes(*args: Any, **kw: Any) -> Any:  # evosax (the cmaes extra) only when asked for
+        from optim.cmaes import cmaes
+
+        return cmaes(*args, **kw)
+
+    def _hybrid(*args: Any, **kw: Any) -> Any:
+        from optim.hybrid import hybrid
+
+        return hybrid(*args, **kw)
 
     if isinstance(budget, bool) or not isinstance(budget, (int, np.integer)) or budget < 1:
         raise ValueError(f"budget: must be a positive integer number of simulations, got {budget!r}")
@@ -116,11 +132,28 @@ def standard_tuners(
         "grid": lambda: grid_search(
             problem, points_per_dim=int(np.floor(evals ** (1 / d) + 1e-9)), batch_size=batch_size
         ),
+        "cmaes": lambda: _cmaes(problem, popsize=n_particles, iters=evals // n_particles, key=key, progress=progress),
+        "hybrid": lambda: _hybrid(
+            problem,
+            popsize=n_particles,
+            iters=max(1, evals // (4 * n_particles)),
+            key=key,
+            steps=hybrid_steps,
+            tune_options=dict(gtol=1e-9, patience=20),
+        ),
     }
     unknown = [n for n in names if n not in makers]
     if unknown:
         raise ValueError(f"tuners: unknown standard tuner(s) {unknown}; known: {', '.join(makers)}")
-    too_small = {"gradient": evals < n_starts, "pso": evals < n_particles, "random": evals < 1, "grid": evals < 1}
+    hybrid_steps = evals - max(1, evals // (4 * n_particles)) * n_particles
+    too_small = {
+        "gradient": evals < n_starts,
+        "pso": evals < n_particles,
+        "random": evals < 1,
+        "grid": evals < 1,
+        "cmaes": evals < n_particles,
+        "hybrid": hybrid_steps < 1,
+    }
     small = [n for n in names if too_small[n]]
     if small:
         raise ValueError(
