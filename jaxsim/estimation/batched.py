@@ -14,9 +14,9 @@ sweep over noise scales — and returns each run's total log-likelihood ``(runs,
   is in cache — a full ``(runs, T, p) → (T, p, runs)`` transpose moves one number at a time and costs
   more than the filter on large batches.
 * **Shared model** (``r_scale = q_scale = None``): the covariances, gains and innovation covariances do
-  not depend on the data, so the covariance recursion runs once, unbatched
-  (:func:`~jaxsim.estimation.shared_gain.covariance_sequence`'s arithmetic, Joseph form), and the
-  batched recursion is the mean only: per step ``r = y − H m``, ``z = W r`` (``W = L_S⁻¹``),
+  not depend on the data, so the covariance recursion runs once, unbatched (as in
+  :mod:`~jaxsim.estimation.shared_gain`, in the written-out Joseph form below), and the batched
+  recursion is the mean only: per step ``r = y − H m``, ``z = W r`` (``W = L_S⁻¹``),
   ``m ← F m + (F K) r + B u``, ``ℓ += −½ zᵀz`` — about ``2p(2n + p) + 2n²`` flops per run and step.
 * **Per-run noise scales** (``r_scale``/``q_scale``, shape ``(runs,)``: run ``i`` uses ``R·r_scale[i]``
   and ``Q·q_scale[i]``): every run needs its own gain, so the covariance recursion is batched too,
@@ -155,7 +155,8 @@ def _bt(a: jax.Array) -> jax.Array:
 
 
 def _cholesky(s: jax.Array) -> list[list[jax.Array]]:
-    """Lower Cholesky factor of ``s (p, p, runs)`` as a nested list of ``(runs,)`` entries (``None`` above the diagonal)."""
+    """Lower Cholesky factor of ``s (p, p, runs)``: a nested list of ``(runs,)`` entries, ``None`` above
+    the diagonal."""
     k = s.shape[0]
     low: list[list[Any]] = [[None] * k for _ in range(k)]
     for j in range(k):
