@@ -10,13 +10,16 @@ Two scenarios:
 * ``shared_model`` (the issue's benchmark): all runs share the model.  The covariance recursion
   does not depend on the data, and ``vmap`` leaves it unbatched — JAX computes it once per step
   for all runs (dynamax's ``vmap`` gets the same benefit); :mod:`jaxsim.estimation.shared_gain`
-  does it explicitly.  Rows: ours ``jit(vmap(kalman_filter))`` (Joseph form) and shared-gain, in
+  does it explicitly, and :func:`~jaxsim.estimation.batched.batched_kalman_loglik` (the
+  ``ours_shared_gain`` rows) runs the covariances once per call and the means time-major with the runs
+  on the fast axis.  Rows: ours ``jit(vmap(kalman_filter))`` (Joseph form) and batched, in
   float64 and float32, and dynamax ``jit(vmap(lgssm_filter))`` (float64), all on every run in
   chunks of ``--chunk`` runs;
   a NumPy filter vectorised over runs (per-run covariance stacks) and its shared-gain twin;
   FilterPy's ``KalmanFilter`` in a Python loop.
 * ``per_run_model``: run ``i`` uses ``R·sᵢ`` (``sᵢ`` log-uniform in [0.5, 2]), so every run carries
-  its own covariance recursion (a sweep over a model parameter).  Rows: ours, dynamax, NumPy.
+  its own covariance recursion (a sweep over a model parameter).  Rows: ours (vmap, and batched with
+  ``r_scale``: the covariance recursions batched with the runs on the fast axis), dynamax, NumPy.
 
 NumPy and FilterPy run on subsets (``--numpy-runs``, ``--filterpy-runs``: the first runs of the
 first chunk) and are extrapolated linearly to all runs.  GFLOP/s = analytic flops of the
@@ -26,7 +29,16 @@ covariance step per step), a multiply-add counted as 2 — divided by the wall t
 to the machine's matmul peak measured as the median time of a ``2048 × 2048`` ``jnp.dot``
 (``2n³`` flops).  Timings: median of ``--repeats`` after a compiling call.
 
-Usage: ``python -m experiments.benchmarks.kalman_filter [--runs 100000] [--steps 1000] [--json F]``
+``--chunks 100,500,2000`` instead times only dynamax, ours ``vmap`` and ours batched, one chunk of
+each size, in interleaved rounds (median of ``--repeats``), and prints the speed-up over dynamax, the
+log-likelihoods' largest relative difference from dynamax's exact filter (its ``1e-9·I`` boost of
+``S`` switched off) and each row as a fraction of the machine's roofline: GFLOP/s of the analytic
+flops against the measured matmul peak, and GB/s of the minimum traffic (one read of ``ys``) against
+a measured streaming ``2·x`` bandwidth.  The load average is printed: timings on a shared machine move
+with it.
+
+Usage: ``python -m experiments.benchmarks.kalman_filter [--runs 100000] [--steps 1000] [--json F]``;
+``python -m experiments.benchmarks.kalman_filter --chunks 100,500,2000 --repeats 7``
 (``XLA_FLAGS=--xla_force_host_platform_device_count=2`` shards each chunk over two CPU devices).
 """
 
@@ -44,8 +56,8 @@ import jaxsim  # noqa: F401  (float64)
 from experiments.benchmarks.closed_loop_pid import shard_batch
 from experiments.benchmarks.timing import median_time, write_json
 from jaxsim.core.pytree import replace
+from jaxsim.estimation.batched import batched_kalman_loglik
 from jaxsim.estimation.lgssm import LinearGaussianSSM, kalman_filter, lgssm, sample
-from jaxsim.estimation.shared_gain import covariance_sequence, mean_filter
 
 N_STATES, N_MEAS = 4, 2
 
@@ -120,9 +132,16 @@ def ours_per_run(model: LinearGaussianSSM):
     return jax.jit(jax.vmap(lambda y, s: kalman_filter(replace(model, R=model.R * s), y).log_likelihood))
 
 
-def ours_shared(model: LinearGaussianSSM, steps: int):
-    seq = covariance_sequence(model, steps)
-    return jax.jit(jax.vmap(lambda y: mean_filter(model, seq, y, save_means=False).log_likelihood))
+def ours_shared(model: LinearGaussianSSM, steps: int | None = None):
+    """:func:`~jaxsim.estimation.batched.batched_kalman_loglik`: covariances once per call, means
+    time-major with the runs on the fast axis (``steps`` unused: kept for callers)."""
+    return jax.jit(lambda y: batched_kalman_loglik(model, y))
+
+
+def ours_batched_per_run(model: LinearGaussianSSM):
+    """:func:`~jaxsim.estimation.batched.batched_kalman_loglik` with ``r_scale``: per-run covariance
+    recursions, batched with the runs on the fast axis."""
+    return jax.jit(lambda y, s: batched_kalman_loglik(model, y, r_scale=s))
 
 
 def time_sweep(fn, runs, chunk, steps, dtype, repeats, scales=None) -> tuple[float, np.ndarray, float]:
@@ -151,6 +170,101 @@ def dynamax_fn(model: LinearGaussianSSM, per_run: bool = False):
         return lgssm_filter(params, y).marginal_loglik
 
     return jax.jit(jax.vmap(ll) if per_run else jax.vmap(lambda y: ll(y)))
+
+
+def dynamax_exact_loglik(model: LinearGaussianSSM, y, scales=None) -> np.ndarray:
+    """dynamax's log-likelihoods with its ``1e-9·I`` boost of ``S`` in the gain solve switched off (the
+    exact filter, for the 1e-10 equality check; the boost alone moves per-run log-likelihoods by
+    ~3e-10 relative on this model)."""
+    import dynamax.linear_gaussian_ssm.inference as dyn
+    from dynamax.utils.utils import psd_solve
+
+    orig = dyn.psd_solve
+    dyn.psd_solve = functools.partial(psd_solve, diagonal_boost=0.0)
+    try:  # traced (and so patched) on this call only
+        fn = dynamax_fn(model, per_run=scales is not None)
+        return np.asarray(fn(y) if scales is None else fn(y, scales))
+    finally:
+        dyn.psd_solve = orig
+        jax.config.update("jax_default_matmul_precision", None)
+
+
+def stream_bandwidth(n_bytes: int = 256 * 2**20, repeats: int = 5) -> float:
+    """GB/s of a streaming ``y = 2·x`` over ``n_bytes`` of float64 (bytes read + bytes written, median)."""
+    x = jnp.ones((n_bytes // 8,), jnp.float64)
+    scale = jax.jit(lambda a: 2.0 * a)
+    scale(x).block_until_ready()
+    return 2 * n_bytes / median_time(lambda: scale(x).block_until_ready(), repeats) / 1e9
+
+
+def chunk_sweep(chunks, steps: int, rounds: int) -> dict:
+    """For each chunk size: dynamax, ours ``vmap(kalman_filter)`` and ours batched, in both scenarios,
+    timed in interleaved rounds (median), with ratios vs dynamax and fractions of the machine's FLOP
+    and bandwidth roofline.  The minimum memory traffic is one read of ``ys`` (plus the scales and
+    the output), the flops are the analytic counts used by :func:`main`."""
+    import os
+
+    model = cv_model(jnp.float64)
+    peak, bw = matmul_peak(jnp.float64), stream_bandwidth()
+    out: dict = {"matmul_peak_gflops_f64": peak, "stream_gbs": bw, "load_average": os.getloadavg(), "chunks": {}}
+    print(f"Kalman filter 4 states / 2 measurements, {steps} steps; interleaved rounds: median of {rounds}")
+    print(
+        f"roofline: matmul peak {peak:.1f} GFLOP/s (f64, 2048² jnp.dot); streaming copy {bw:.1f} GB/s; "
+        f"load average {out['load_average'][0]:.2f}"
+    )
+    for chunk in chunks:
+        y = data_chunk(0, chunk, steps, jnp.float64)
+        s = jnp.asarray(run_scales(chunk), jnp.float64)
+        fns = {
+            ("shared", "dynamax"): (dynamax_fn(model), (y,)),
+            ("shared", "ours_vmap"): (ours_generic(model), (y,)),
+            ("shared", "ours_batched"): (ours_shared(model), (y,)),
+            ("per_run", "dynamax"): (dynamax_fn(model, per_run=True), (y, s)),
+            ("per_run", "ours_vmap"): (ours_per_run(model), (y, s)),
+            ("per_run", "ours_batched"): (ours_batched_per_run(model), (y, s)),
+        }
+        lls = {k: np.asarray(f(*a)) for k, (f, a) in fns.items()}  # compiles
+        exact = {"shared": dynamax_exact_loglik(model, y), "per_run": dynamax_exact_loglik(model, y, s)}
+        times: dict = {k: [] for k in fns}
+        for _ in range(rounds):
+            for k, (f, a) in fns.items():
+                start = time.perf_counter()
+                f(*a).block_until_ready()
+                times[k].append(time.perf_counter() - start)
+        med = {k: float(np.median(v)) for k, v in times.items()}
+        print(
+            f"\n[{chunk} runs]  {'ms':>9}{'× dynamax':>11}{'GFLOP/s':>9}{'% peak':>8}{'GB/s':>7}{'% bw':>7}"
+            f"{'rel Δ vs dynamax (exact)':>26}"
+        )
+        row: dict = {}
+        for (scen, name), sec in med.items():
+            work = chunk * steps
+            if scen == "shared":
+                flops = shared_step_flops() * work + generic_step_flops() * steps
+            else:
+                flops = generic_step_flops() * work
+            n_bytes = y.size * 8 + chunk * 8 * (2 if scen == "per_run" else 1)
+            ref = exact[scen]
+            diff = float(np.max(np.abs(lls[(scen, name)] - ref) / np.abs(ref)))
+            ratio = med[(scen, "dynamax")] / sec
+            row[f"{scen}/{name}"] = {
+                "seconds": sec,
+                "x_dynamax": ratio,
+                "gflops": flops / sec / 1e9,
+                "peak_fraction": flops / sec / 1e9 / peak,
+                "gbs": n_bytes / sec / 1e9,
+                "bandwidth_fraction": n_bytes / sec / 1e9 / bw,
+                "max_rel_diff": diff,
+            }
+            r = row[f"{scen}/{name}"]
+            print(
+                f"  {scen + '/' + name:<22}{sec * 1e3:>9.2f}{ratio:>11.2f}{r['gflops']:>9.2f}"
+                f"{100 * r['peak_fraction']:>7.1f}%{r['gbs']:>7.2f}{100 * r['bandwidth_fraction']:>6.1f}%{diff:>26.1e}"
+            )
+        out["chunks"][chunk] = row
+    out["load_average_end"] = os.getloadavg()
+    print(f"\nload average at the end {out['load_average_end'][0]:.2f}")
+    return out
 
 
 def numpy_filter(model: LinearGaussianSSM, y: np.ndarray, scales: np.ndarray | None = None) -> np.ndarray:
@@ -231,7 +345,17 @@ def main(argv=None) -> dict:
     ap.add_argument("--numpy-runs", type=int, default=1000)
     ap.add_argument("--filterpy-runs", type=int, default=3)
     ap.add_argument("--json", default=None)
+    ap.add_argument(
+        "--chunks",
+        default=None,
+        help="comma-separated chunk sizes (e.g. 100,500,2000): only the dynamax / ours_vmap / ours_batched "
+        "comparison per chunk size, interleaved rounds (--repeats), roofline fractions",
+    )
     args = ap.parse_args(argv)
+    if args.chunks:
+        out = chunk_sweep([int(c) for c in args.chunks.split(",")], args.steps, args.repeats)
+        write_json(args.json, out)
+        return out
     runs, steps = args.runs, args.steps
     chunk = min(args.chunk, runs)
     work = steps * runs
@@ -282,6 +406,7 @@ def main(argv=None) -> dict:
     # --- scenario 2: every run has its own R (a sweep over a model parameter) -------------------
     ours("per_run_model", "ours_vmap_f64", ours_per_run(model64), jnp.float64, True)
     ours("per_run_model", "ours_vmap_f32", ours_per_run(model32), jnp.float32, True)
+    ours("per_run_model", "ours_batched_f64", ours_batched_per_run(model64), jnp.float64, True)
     if "dynamax" not in out:
         ours("per_run_model", "dynamax_vmap_f64", dynamax_fn(model64, per_run=True), jnp.float64, True)
     peer(

@@ -13,7 +13,8 @@ Modules (one idea each): :mod:`~.kalman` (predict/update, Joseph and square-root
 :mod:`~.kalman_bucy`, :mod:`~.ekf`, :mod:`~.ukf`, :mod:`~.cubature`, :mod:`~.smoothers`,
 :mod:`~.parallel`, :mod:`~.gating`, :mod:`~.imm`, :mod:`~.mmae`, :mod:`~.particle`,
 :mod:`~.alpha_beta`, :mod:`~.observers`, :mod:`~.allan`, :mod:`~.shared_gain` (Monte Carlo
-with one covariance recursion), :mod:`~.linalg` (unrolled small-matrix factorisations),
+with one covariance recursion), :mod:`~.batched` (log-likelihoods of many runs through one model,
+time-major with the runs on the fast axis), :mod:`~.linalg` (unrolled small-matrix factorisations),
 :mod:`~.filtering` (the shared scan loop), :mod:`~.adapters` (closed-loop ``Estimator``);
 imported by full path: :mod:`~.reduced_order_smo` (the fault-identification observer of seed 000,
 paper 2), :mod:`~.hankel_predictor` (seed 000, paper 6), :mod:`~.leader_predictor` (seed 002:
@@ -42,6 +43,7 @@ from jaxsim.estimation.alpha_beta import (
     sliding_window_fit,
     window_bank,
 )
+from jaxsim.estimation.batched import batched_kalman_loglik, time_major_scan
 from jaxsim.estimation.cubature import CubaturePoints, cubature_kalman_filter
 from jaxsim.estimation.ekf import ekf_member, ekf_predict, ekf_update, extended_kalman_filter
 from jaxsim.estimation.filtering import FilterMember
@@ -132,6 +134,7 @@ __all__ = [
         "adapters",
         "allan",
         "alpha_beta",
+        "batched",
         "cubature",
         "ekf",
         "filtering",

@@ -1,0 +1,356 @@
+"""Many measurement sequences through one linear-Gaussian model: one log-likelihood per run, fast.
+
+:func:`batched_kalman_loglik` filters ``ys (runs, T, p)`` — a Monte-Carlo batch of noise draws, or a
+sweep over noise scales — and returns each run's total log-likelihood ``(runs,)``.  It computes what
+``jax.vmap(lambda y: kalman_filter(model, y).log_likelihood)(ys)`` computes, laid out for speed:
+
+* **Time-major, batch on the fast axis.**  Every per-step quantity is an array whose last axis is the
+  run: means ``(n, runs)``, covariances ``(n, n, runs)``.  The small matrix products of a step are
+  written as broadcast multiply-and-sum over the tiny axes (``n``, ``p`` ≤ a few), which XLA fuses into
+  one loop over runs with SIMD, instead of one tiny GEMM or LAPACK call per run.
+* **Transposed block by block.**  The input stays batch-major (each run contiguous).  It is transposed
+  once in blocks of ``block`` steps (``(runs, T/L, L·p) → (T/L, runs, L·p)``: contiguous pieces of
+  ``L·p`` numbers, close to a plain copy), and each block is turned time-major inside the scan while it
+  is in cache — a full ``(runs, T, p) → (T, p, runs)`` transpose moves one number at a time and costs
+  more than the filter on large batches.
+* **Shared model** (``r_scale = q_scale = None``): the covariances, gains and innovation covariances do
+  not depend on the data, so the covariance recursion runs once, unbatched (as in
+  :mod:`~jaxsim.estimation.shared_gain`, in the written-out Joseph form below), and the batched
+  recursion is the mean only: per step ``r = y − H m``, ``z = W r`` (``W = L_S⁻¹``),
+  ``m ← F m + (F K) r + B u``, ``ℓ += −½ zᵀz`` — about ``2p(2n + p) + 2n²`` flops per run and step.
+* **Per-run noise scales** (``r_scale``/``q_scale``, shape ``(runs,)``: run ``i`` uses ``R·r_scale[i]``
+  and ``Q·q_scale[i]``): every run needs its own gain, so the covariance recursion is batched too,
+  with the runs on the fast axis.  The update is the Joseph form written out,
+  ``P⁺ = P − K Cᵀ − C Kᵀ + K S Kᵀ`` with ``C = P Hᵀ`` — algebraically ``(I − KH) P (I − KH)ᵀ + K R Kᵀ``
+  for any gain (so first-order insensitive to gain error) and symmetric by construction, at a third of
+  the flops of the product form.  (When ``Q``, ``R`` *and* ``P0`` share one scale ``s`` the gains are
+  shared and ``P`` scales by ``s``; that case is not special-cased here.)
+
+Shared availability ``mask`` (``(T,)`` or ``(T, p)``, the same for every run) and shared inputs
+``u (T, m)`` are supported, as are time-varying ``F, Q, H, R, B`` (leading ``T`` axis); conventions
+(update with ``y_0`` first, ``u[t]`` drives ``t → t+1``) are :func:`~jaxsim.estimation.lgssm.kalman_filter`'s.
+
+Bad input: shapes, the model (:func:`~jaxsim.estimation.lgssm.validate_model`) and the scales
+(positive, finite) are checked before tracing.  Non-finite measurements are not scanned up front (that
+would be a second pass over the data): an unmasked NaN/inf makes its run's log-likelihood non-finite,
+and on concrete input that run is then located and reported as a ``ValueError``.  Under ``jit``/``vmap``
+the NaN is returned instead.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any, Callable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxsim.core.validation import check_positive, check_positive_int, check_shape, is_concrete
+from jaxsim.estimation import linalg
+from jaxsim.estimation.kalman import LOG_2PI
+from jaxsim.estimation.lgssm import (
+    LinearGaussianSSM,
+    is_time_varying,
+    prepare_inputs,
+    prepare_measurements,
+    validate_model,
+)
+from jaxsim.precision import to_common_float
+
+DEFAULT_BLOCK = 25
+
+
+def batched_kalman_loglik(
+    model: LinearGaussianSSM,
+    ys: Any,
+    u: Any = None,
+    *,
+    mask: Any = None,
+    r_scale: Any = None,
+    q_scale: Any = None,
+    block: int = DEFAULT_BLOCK,
+) -> jax.Array:
+    """Total Kalman-filter log-likelihood of each of many measurement sequences through one model.
+
+    Args:
+        model: the :class:`~jaxsim.estimation.lgssm.LinearGaussianSSM` (``n`` states, ``p`` outputs).
+        ys: measurements ``(runs, T, p)``, batch-major (each run contiguous).
+        u: shared inputs ``(T, m)`` (the same for every run); ``u[t]`` drives ``t → t+1``.
+        mask: shared availability ``(T,)`` or ``(T, p)`` booleans (``True`` = measured); masked
+            entries of ``ys`` are ignored and may hold NaN.
+        r_scale: optional ``(runs,)`` positive factors: run ``i`` uses ``R·r_scale[i]``.
+        q_scale: optional ``(runs,)`` positive factors: run ``i`` uses ``Q·q_scale[i]``.
+        block: steps per transposed block (a tuning knob: the block of all runs should fit in cache).
+
+    Returns:
+        ``(runs,)`` log-likelihoods, equal to ``kalman_filter(model_i, ys[i], u, mask=mask).log_likelihood``
+        to rounding.  Without scales the covariance recursion runs once for all runs; with scales it
+        runs batched (see the module docstring).  The model, ``ys``, ``u`` and the scales are cast to one
+        float dtype (float64 unless all are float32).
+    """
+    ys = jnp.asarray(ys)
+    check_shape("ys", ys, (None, None, None))
+    runs, n_steps, p = ys.shape
+    validate_model(model, n_steps=n_steps)
+    if p != model.n_outputs:
+        raise ValueError(f"ys: expected shape (runs, T, {model.n_outputs}), got {tuple(ys.shape)}")
+    block = check_positive_int("block", block)
+    scales = {}
+    for name, s in (("r_scale", r_scale), ("q_scale", q_scale)):
+        if s is not None:
+            s = jnp.asarray(s)
+            check_shape(name, s, (runs,))
+            check_positive(name, s)
+            scales[name] = s
+    _, m = prepare_measurements(jnp.zeros((n_steps, p), dtype=ys.dtype), p, mask)
+    (model, ys, u, scales), _ = to_common_float((model, ys, None if u is None else jnp.asarray(u), scales))
+    u = prepare_inputs(u, n_steps, model)
+    masked = mask is not None
+    if scales:
+        one = jnp.ones((runs,), dtype=ys.dtype)
+        rs, qs = scales.get("r_scale", one), scales.get("q_scale", one)
+        ll = _per_run_loglik(model, ys, m, u, rs, qs, block, masked)
+    else:
+        ll = _shared_loglik(model, ys, m, u, block, masked)
+    if is_concrete(ll):
+        _report_non_finite(ll, ys, m)
+    return ll
+
+
+def _report_non_finite(ll: jax.Array, ys: jax.Array, m: jax.Array) -> None:
+    """Raise for the first run whose log-likelihood is not finite because of an unmasked bad ``ys``."""
+    bad_runs = np.flatnonzero(~np.isfinite(np.asarray(ll)))
+    if bad_runs.size == 0:
+        return
+    i = int(bad_runs[0])
+    bad = ~np.isfinite(np.asarray(ys[i])) & np.asarray(m)
+    if bad.any():
+        t, j = np.argwhere(bad)[0]
+        raise ValueError(
+            f"ys: non-finite value in run {i} at step {t}, component {j} that is not masked; pass a "
+            f"mask (shared by all runs) or filter that run separately"
+        )
+
+
+# --- small products with the runs on the last axis --------------------------------------------------
+
+
+def _mv(a: jax.Array, v: jax.Array) -> jax.Array:
+    """``a (i, k)`` times ``v (k, runs)`` → ``(i, runs)``."""
+    return jnp.sum(a[:, :, None] * v[None, :, :], axis=1)
+
+
+def _bmm(a: jax.Array, b: jax.Array) -> jax.Array:
+    """Per run ``a[..., r] @ b[..., r]``: ``(i, k, runs) × (k, j, runs) → (i, j, runs)``; either may
+    also be a shared matrix without the runs axis."""
+    a3 = a if a.ndim == 3 else a[:, :, None]
+    b3 = b if b.ndim == 3 else b[:, :, None]
+    return jnp.sum(a3[:, :, None, :] * b3[None, :, :, :], axis=1)
+
+
+def _bt(a: jax.Array) -> jax.Array:
+    """Transpose of the two matrix axes of ``(i, j, runs)``."""
+    return jnp.swapaxes(a, 0, 1)
+
+
+def _cholesky(s: jax.Array) -> list[list[jax.Array]]:
+    """Lower Cholesky factor of ``s (p, p, runs)``: a nested list of ``(runs,)`` entries, ``None`` above
+    the diagonal."""
+    k = s.shape[0]
+    low: list[list[Any]] = [[None] * k for _ in range(k)]
+    for j in range(k):
+        d = s[j, j] - sum((low[j][q] ** 2 for q in range(j)), jnp.zeros_like(s[j, j]))
+        low[j][j] = jnp.sqrt(d)
+        for i in range(j + 1, k):
+            low[i][j] = (s[i, j] - sum((low[i][q] * low[j][q] for q in range(j)), jnp.zeros_like(d))) / low[j][j]
+    return low
+
+
+def _solve_lower(low: list, b: jax.Array) -> jax.Array:
+    """``L⁻¹ b`` per run for ``b (p, ..., runs)``."""
+    rows: list[jax.Array] = []
+    for i in range(len(low)):
+        rows.append((b[i] - sum((low[i][q] * rows[q] for q in range(i)), jnp.zeros_like(b[i]))) / low[i][i])
+    return jnp.stack(rows)
+
+
+def _solve_upper_t(low: list, b: jax.Array) -> jax.Array:
+    """``L⁻ᵀ b`` per run for ``b (p, ..., runs)``."""
+    k = len(low)
+    rows: list[Any] = [None] * k
+    for i in reversed(range(k)):
+        rows[i] = (b[i] - sum((low[q][i] * rows[q] for q in range(i + 1, k)), jnp.zeros_like(b[i]))) / low[i][i]
+    return jnp.stack(rows)
+
+
+# --- the blocked time-major scan ---------------------------------------------------------------------
+
+
+def time_major_scan(step: Callable, carry: Any, ys: jax.Array, xs: Any, block: int) -> Any:
+    """``lax.scan`` of ``step(carry, (y_t (p, runs), x_t)) -> carry`` over ``ys (runs, T, p)`` and the
+    per-step pytree ``xs`` (leading ``T`` axis); returns the final carry.
+
+    ``ys`` is transposed in blocks of ``block`` steps (see the module docstring); a last partial block
+    is run after the full ones.
+    """
+    runs, n_steps, p = ys.shape
+    size = min(block, n_steps)
+    n_blocks = n_steps // size
+    head = n_blocks * size
+
+    def run_block(c, yb, xb):  # yb (runs, k, p)
+        def inner(c2, x):
+            return step(c2, x), None
+
+        return jax.lax.scan(inner, c, (jnp.transpose(yb, (1, 2, 0)), xb))[0]
+
+    y_blocks = jnp.swapaxes(ys[:, :head].reshape(runs, n_blocks, size * p), 0, 1)
+    x_blocks = jax.tree_util.tree_map(lambda a: a[:head].reshape((n_blocks, size) + a.shape[1:]), xs)
+
+    def outer(c, b):
+        yb, xb = b
+        return run_block(c, yb.reshape(runs, size, p), xb), None
+
+    carry = jax.lax.scan(outer, carry, (y_blocks, x_blocks))[0]
+    if head < n_steps:
+        carry = run_block(carry, ys[:, head:], jax.tree_util.tree_map(lambda a: a[head:], xs))
+    return carry
+
+
+def _at(model: LinearGaussianSSM, name: str, x: dict) -> jax.Array:
+    """Field ``name`` at the current step: the scanned slice if time-varying, else the constant (kept
+    out of the scanned inputs so that XLA can fold a constant model into the step)."""
+    return x[name] if name in x else getattr(model, name)
+
+
+def _varying(model: LinearGaussianSSM, names: tuple[str, ...]) -> dict[str, jax.Array]:
+    return {k: getattr(model, k) for k in names if is_time_varying(model, k)}
+
+
+def _input_drive(model: LinearGaussianSSM, u: jax.Array | None) -> jax.Array | None:
+    """``B_t u_t`` per step, ``(T, n)``, or ``None`` without inputs."""
+    if u is None or model.B is None:
+        return None
+    B = model.B if is_time_varying(model, "B") else model.B[None]
+    return jnp.einsum("tij,tj->ti", B, u)
+
+
+def _masked_noise(R: jax.Array, m_t: jax.Array) -> jax.Array:
+    """``R`` with masked components decoupled (unit variance, uncorrelated)."""
+    both = m_t[:, None] & m_t[None, :]
+    return jnp.where(both, R, jnp.eye(R.shape[0], dtype=R.dtype))
+
+
+# --- shared model: covariances once, means batched ------------------------------------------------
+
+
+def _gain_sequence(model: LinearGaussianSSM, m: jax.Array, masked: bool) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """One unbatched covariance recursion: per step the gain ``K (T, n, p)``, the whitening
+    ``W = L_S⁻¹ (T, p, p)`` and ``−½(log det S + dof·log 2π) (T,)``.  Joseph form written out (see the
+    module docstring); masked components get zero ``H`` rows, decoupled noise and zero ``W`` rows."""
+    mm = linalg.matmul
+    p = model.n_outputs
+    eye = jnp.eye(p, dtype=model.P0.dtype)
+
+    def step(P, x):
+        H, R, F, Q, m_t = _at(model, "H", x), _at(model, "R", x), _at(model, "F", x), _at(model, "Q", x), x["m"]
+        if masked:
+            H, R = jnp.where(m_t[:, None], H, 0.0), _masked_noise(R, m_t)
+        C = mm(P, H.T)
+        S = mm(H, C) + R
+        low = linalg.cholesky(0.5 * (S + S.T))
+        W = linalg.solve_lower(low, eye)
+        K = mm(C, mm(W.T, W))
+        KC = mm(K, C.T)
+        P = P - KC - KC.T + mm(mm(K, S), K.T)
+        P = mm(mm(F, P), F.T) + Q
+        if masked:
+            W = jnp.where(m_t[:, None], W, 0.0)
+        log_norm = -(jnp.sum(jnp.log(jnp.diagonal(low))) + 0.5 * jnp.sum(m_t) * LOG_2PI)
+        return 0.5 * (P + P.T), (K, W, log_norm)
+
+    xs = dict(_varying(model, ("H", "R", "F", "Q")), m=m)
+    return jax.lax.scan(step, model.P0, xs)[1]
+
+
+@functools.partial(jax.jit, static_argnames=("block", "masked"))
+def _shared_loglik(model, ys, m, u, block, masked):
+    runs = ys.shape[0]
+    K, W, log_norm = _gain_sequence(model, m, masked)
+    F_t = model.F if is_time_varying(model, "F") else model.F[None]
+    xs = dict(_varying(model, ("H", "F")), FK=jnp.einsum("tij,tjk->tik", F_t, K), W=W)
+    bu = _input_drive(model, u)
+    if bu is not None:
+        xs["bu"] = bu
+    if masked:
+        xs["m"] = m
+
+    def step(c, inp):
+        mean, acc = c
+        y, x = inp
+        r = y - _mv(_at(model, "H", x), mean)
+        if masked:
+            r = jnp.where(x["m"][:, None], r, 0.0)
+        z = _mv(x["W"], r)
+        mean = _mv(_at(model, "F", x), mean) + _mv(x["FK"], r)
+        if "bu" in x:
+            mean = mean + x["bu"][:, None]
+        return mean, acc + jnp.sum(z * z, axis=0)
+
+    init = (jnp.broadcast_to(model.m0[:, None], (model.n_states, runs)), jnp.zeros((runs,), ys.dtype))
+    _, acc = time_major_scan(step, init, ys, xs, block)
+    return jnp.sum(log_norm) - 0.5 * acc
+
+
+# --- per-run noise scales: covariances batched too -------------------------------------------------
+
+
+@functools.partial(jax.jit, static_argnames=("block", "masked"))
+def _per_run_loglik(model, ys, m, u, rs, qs, block, masked):
+    runs, n_steps, p = ys.shape
+    n = model.n_states
+    xs = _varying(model, ("H", "F", "Q", "R"))
+    bu = _input_drive(model, u)
+    if bu is not None:
+        xs["bu"] = bu
+    if masked:
+        xs["m"] = m
+
+    def step(c, inp):
+        mean, P, acc = c
+        y, x = inp
+        H, R, F, Q = _at(model, "H", x), _at(model, "R", x), _at(model, "F", x), _at(model, "Q", x)
+        r_run = R[:, :, None] * rs
+        if masked:
+            m_t = x["m"]
+            H = jnp.where(m_t[:, None], H, 0.0)
+            both = (m_t[:, None] & m_t[None, :])[:, :, None]
+            r_run = jnp.where(both, r_run, jnp.eye(p, dtype=ys.dtype)[:, :, None])
+        C = _bmm(P, H.T)  # P Hᵀ  (n, p, runs)
+        S = _bmm(H, C) + r_run
+        S = 0.5 * (S + _bt(S))
+        low = _cholesky(S)
+        K = _bt(_solve_upper_t(low, _solve_lower(low, _bt(C))))  # C S⁻¹  (n, p, runs)
+        res = y - _mv(H, mean)
+        if masked:
+            res = jnp.where(m_t[:, None], res, 0.0)
+        z = _solve_lower(low, res)
+        logdet = 2.0 * sum(jnp.log(low[i][i]) for i in range(p))
+        dof = jnp.sum(x["m"]) if masked else p
+        acc = acc - 0.5 * (jnp.sum(z * z, axis=0) + logdet + dof * LOG_2PI)
+        mean = mean + jnp.sum(K * res[None, :, :], axis=1)
+        KC = _bmm(K, _bt(C))
+        P = P - KC - _bt(KC) + _bmm(_bmm(K, S), _bt(K))
+        mean = _mv(F, mean)
+        if "bu" in x:
+            mean = mean + x["bu"][:, None]
+        P = _bmm(_bmm(F, P), F.T) + Q[:, :, None] * qs
+        return mean, 0.5 * (P + _bt(P)), acc
+
+    init = (
+        jnp.broadcast_to(model.m0[:, None], (n, runs)),
+        jnp.broadcast_to(model.P0[:, :, None], (n, n, runs)),
+        jnp.zeros((runs,), ys.dtype),
+    )
+    return time_major_scan(step, init, ys, xs, block)[2]
