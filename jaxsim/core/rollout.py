@@ -174,6 +174,8 @@ def hold_input(
     def one(i, z):
         return solver.step(field, t0 + i * dt, z, dt)
 
+    if substeps == 1:  # no loop: a one-trip loop nested in the rollout's scan costs compile time under AD
+        return one(0, x)
     return jax.lax.fori_loop(0, substeps, one, x)
 
 
