@@ -36,7 +36,6 @@ from experiments.runner import as_study
 from experiments.sweep_command import add_parser as add_sweep_parser
 from experiments.sweep_command import run_sweep_command
 
-
 CACHE_HELP = (
     "JAX's persistent compilation cache is on: compiled programs are kept in $JAXSIM_CACHE_DIR "
     "(default ~/.cache/jaxsim/jax, or $XDG_CACHE_HOME/jaxsim/jax), so repeated runs skip most compilation; "
