@@ -11,12 +11,19 @@ output or that cannot be written (:mod:`experiments.output_folder`), writes the 
 folder beside ``DIR`` and swaps it in at the end: a failed or interrupted run leaves the previous
 output intact.  Every refusal and every ``OSError`` ends with one ``error: ...`` line on stderr and
 exit code 2.
+
+JAX's persistent compilation cache is on for every command (:func:`enable_compilation_cache`): compiled
+programs are kept in ``$JAXSIM_CACHE_DIR`` (default ``~/.cache/jaxsim/jax``, under
+``$XDG_CACHE_HOME`` if set), so a second run of a study skips most of its compilation.
+``JAXSIM_CACHE_DIR=`` (empty) turns it off; a ``JAX_COMPILATION_CACHE_DIR`` set by the caller (the
+tests give each spawned CLI theirs) is respected when ``JAXSIM_CACHE_DIR`` is not set.
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import sys
 import time
 from pathlib import Path
@@ -28,6 +35,40 @@ from experiments.report import write_report
 from experiments.runner import as_study
 from experiments.sweep_command import add_parser as add_sweep_parser
 from experiments.sweep_command import run_sweep_command
+
+CACHE_HELP = (
+    "JAX's persistent compilation cache is on: compiled programs are kept in $JAXSIM_CACHE_DIR "
+    "(default ~/.cache/jaxsim/jax, or $XDG_CACHE_HOME/jaxsim/jax), so repeated runs skip most compilation; "
+    "JAXSIM_CACHE_DIR= (empty) turns it off; without JAXSIM_CACHE_DIR, a JAX_COMPILATION_CACHE_DIR already "
+    "set in the environment is used instead."
+)
+
+
+def cache_dir() -> Path | None:
+    """The persistent-cache folder the CLI uses (``None``: off, or left to ``JAX_COMPILATION_CACHE_DIR``)."""
+    if "JAXSIM_CACHE_DIR" in os.environ:
+        value = os.environ["JAXSIM_CACHE_DIR"].strip()
+        return Path(value).expanduser() if value else None
+    if os.environ.get("JAX_COMPILATION_CACHE_DIR"):
+        return None  # JAX reads it itself
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base).expanduser() / "jaxsim" / "jax"
+
+
+def enable_compilation_cache() -> None:
+    """Turn on JAX's persistent compilation cache (folder: :func:`cache_dir`) before anything compiles.
+
+    Only the config is set (no backend is initialised, so ``sweep --devices`` still acts first)."""
+    import jax
+
+    folder = cache_dir()
+    if folder is None and "JAXSIM_CACHE_DIR" in os.environ:
+        jax.config.update("jax_enable_compilation_cache", False)
+        return
+    if folder is not None:
+        jax.config.update("jax_compilation_cache_dir", str(folder))
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
+    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
 
 
 def add_preset_arguments(parser: argparse.ArgumentParser) -> None:
@@ -53,10 +94,13 @@ def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="python -m experiments",
         description="Run the toolkit's studies (each reproduces a seed paper's system).",
+        epilog=CACHE_HELP,
     )
     sub = p.add_subparsers(dest="command", required=True)
     sub.add_parser("list", help="list the studies, their presets and default configs")
-    run = sub.add_parser("run", help="run one study and write results.json, CSV tables and PNG plots")
+    run = sub.add_parser(
+        "run", help="run one study and write results.json, CSV tables and PNG plots", epilog=CACHE_HELP
+    )
     run.add_argument("name", metavar="NAME", help="study name (see `list`)")
     add_preset_arguments(run)
     run.add_argument("--out", default=None, help="output folder (default: results/NAME)")
@@ -82,6 +126,7 @@ def _list() -> int:
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
+    enable_compilation_cache()
     try:
         if args.command == "sweep":  # first: --devices must act before JAX initialises
             return run_sweep_command(args)

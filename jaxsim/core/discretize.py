@@ -6,7 +6,9 @@
   input with intensity (power spectral density) ``Qc`` entering through ``G``:
   ``Qd = ∫₀^dt e^{Aτ} G Qc Gᵀ e^{Aᵀτ} dτ``.
 
-Both are differentiable and vmappable (``jax.scipy.linalg.expm``).
+Both are differentiable (forward and reverse mode) and vmappable; the exponential is
+:func:`jaxsim.core.matrix_exp.expm` (one Padé approximant: a fraction of the compile time of
+``jax.scipy.linalg.expm`` inside differentiated losses).
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxsim.core.matrix_exp import expm
 from jaxsim.core.validation import check_finite, check_positive, check_square
 
 
@@ -46,7 +49,7 @@ def c2d_zoh(a: jax.Array, b: jax.Array, dt: float | jax.Array) -> tuple[jax.Arra
     dtype = jnp.result_type(a, b, jnp.asarray(dt))
     block = jnp.zeros((n + m, n + m), dtype=dtype)
     block = block.at[:n, :n].set(a).at[:n, n:].set(b)
-    e = jax.scipy.linalg.expm(block * dt)
+    e = expm(block * dt)
     return e[:n, :n], e[:n, n:]
 
 
@@ -81,7 +84,7 @@ def van_loan(
     _check_dt(dt)
     gqg = g @ qc @ g.T
     block = jnp.block([[-a, gqg], [jnp.zeros_like(a), a.T]])
-    e = jax.scipy.linalg.expm(block * dt)
+    e = expm(block * dt)
     ad = e[n:, n:].T
     qd = ad @ e[:n, n:]
     return ad, 0.5 * (qd + qd.T)

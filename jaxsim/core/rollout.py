@@ -174,6 +174,8 @@ def hold_input(
     def one(i, z):
         return solver.step(field, t0 + i * dt, z, dt)
 
+    if substeps == 1:  # no loop: a one-trip loop nested in the rollout's scan costs compile time under AD
+        return one(0, x)
     return jax.lax.fori_loop(0, substeps, one, x)
 
 
@@ -275,15 +277,18 @@ def _prepare(loop: ClosedLoop, x0: jax.Array, timing: Timing, key: jax.Array | N
 
     def tick(c: _Carry) -> tuple[_Carry, Tick]:
         t = c.k * ts
-        arrived = (c.k % sensor_every) == 0
+        every_tick = sensor_every == 1  # static: no masks to compile (and differentiate) when every tick measures
+        arrived = jnp.asarray(True) if every_tick else (c.k % sensor_every) == 0
         y_new = measure(c.x, t, c.k, c.u_prev)
-        y_held = jnp.where(arrived, y_new, c.y_held)
+        y_held = y_new if every_tick else jnp.where(arrived, y_new, c.y_held)
         r = loop.reference(t)
         if est is None:
             est_state, seen = c.est, y_held
         else:
             updated = est.update(est.params, c.est, y_held)
-            est_state = jax.tree_util.tree_map(lambda a, b: jnp.where(arrived, a, b), updated, c.est)
+            if not every_tick:
+                updated = jax.tree_util.tree_map(lambda a, b: jnp.where(arrived, a, b), updated, c.est)
+            est_state = updated
             seen = est.read(est.params, est_state)
         ctrl_state, u = ctrl.step(ctrl.params, c.ctrl, r, seen, ts, t)
         if est is not None:
