@@ -5,7 +5,9 @@
 ``compare({"gradient": lambda: tune(...), "pso": lambda: pso(...), ...})`` runs any zero-argument
 callables.  Each tuner runs once and its history is read (every tuner returns
 :class:`optim.results.TuneResult`, with ``best_loss``, ``sims`` and ``wall_s`` per step).  The
-harness reports what each used and, for the equal-budget view, the best loss each tuner had
+harness reports what each used — simulations in loss-evaluation equivalents, so a gradient
+evaluation counts what it costs (:func:`optim.tune.grad_cost`, several loss evaluations), not one —
+and, for the equal-budget view, the best loss each tuner had
 reached by the smallest budget any of them used — of simulations (``loss_at_common_sims``) and of
 seconds (``loss_at_common_seconds``).
 
@@ -85,7 +87,9 @@ def standard_tuners(
 
     * ``gradient``: :func:`optim.tune`, Adam(``learning_rate``) in the space's reparametrisation,
       ``n_starts`` starts (start 0 at ``space.init``, the others spread by ``init_spread``),
-      ``budget // (n_starts·S)`` steps (``S`` = scenarios per loss evaluation);
+      ``⌊budget / (n_starts·S·c)⌋`` steps (at least 1; ``S`` = scenarios per loss evaluation,
+      ``c`` = :func:`optim.tune.grad_cost`, what one gradient evaluation costs in loss evaluations,
+      measured once per problem): its ``n_sims`` counts the same loss-evaluation equivalents;
     * ``pso``: :func:`optim.pso`, ``n_particles`` particles, ``budget // (n_particles·S)`` iterations;
     * ``random``: :func:`optim.random_search`, ``budget // S`` points (batches of ``batch_size``);
     * ``grid``: :func:`optim.grid_search`, ``⌊(budget/S)^{1/d}⌋`` points per dimension.
@@ -94,7 +98,7 @@ def standard_tuners(
     """
     from optim.pso import pso
     from optim.search import grid_search, random_search
-    from optim.tune import tune
+    from optim.tune import grad_cost, tune
 
     if isinstance(budget, bool) or not isinstance(budget, (int, np.integer)) or budget < 1:
         raise ValueError(f"budget: must be a positive integer number of simulations, got {budget!r}")
@@ -105,7 +109,7 @@ def standard_tuners(
         "gradient": lambda: tune(
             problem,
             optimizer=optax.adam(learning_rate),
-            steps=evals // n_starts,
+            steps=max(1, int(evals // (n_starts * grad_cost(problem, n_starts=n_starts)))),
             n_starts=n_starts,
             key=key,
             init_spread=init_spread,

@@ -52,8 +52,16 @@ def _code_names(code: types.CodeType) -> set[str]:
     return names
 
 
+def _cell(cell: types.CellType, depth: int) -> Any:
+    try:
+        contents = cell.cell_contents
+    except ValueError:  # an empty cell (a name assigned later in the enclosing scope)
+        raise Unkeyable("an empty closure cell") from None
+    return fingerprint(contents, depth)
+
+
 def _function(fn: types.FunctionType, depth: int) -> tuple:
-    cells = tuple(fingerprint(c.cell_contents, depth + 1) for c in fn.__closure__ or ())
+    cells = tuple(_cell(c, depth + 1) for c in fn.__closure__ or ())
     globs = []
     for name in sorted(_code_names(fn.__code__)):
         if name not in fn.__globals__:
