@@ -10,6 +10,8 @@ reparametrisation); a fresh closure is a fresh ``jax.jit`` cache entry, so witho
 * functions by their code object, defaults, the values in their closure cells and the values of
   the module globals their code names (globals that are functions, classes or modules by identity),
   so two ``optax.adam(0.05)`` built by separate calls share a key while ``optax.adam(0.1)`` does not;
+* :class:`ByIdentity`-wrapped objects by identity (:func:`callable_key`: how the tuner keys its
+  loss and constraint functions — the same object, as ``jax.jit`` would);
 * bound methods by their function and ``__self__`` (by its own ``==``/``hash``: a frozen
   dataclass by value, a :class:`~jaxsim.problem.Problem` by identity);
 * anything else hashable as itself (identity unless it defines ``__eq__``); unhashable, or nested
@@ -85,6 +87,8 @@ def fingerprint(obj: Any, depth: int = 0) -> Any:
     """A hashable key that is equal for objects that compile to the same code (module docstring)."""
     if depth > MAX_DEPTH:
         raise Unkeyable("nested too deeply")
+    if isinstance(obj, ByIdentity):
+        return ("id", obj)
     if isinstance(obj, _SCALARS):
         return (type(obj).__name__, obj)
     if isinstance(obj, (np.ndarray, np.generic, jax.Array)):
@@ -113,6 +117,37 @@ def _hashable(obj: Any) -> Any:
     except TypeError:
         raise Unkeyable(f"unhashable {type(obj).__name__}") from None
     return obj
+
+
+class ByIdentity:
+    """Wraps an object so that :func:`fingerprint` keys it by identity (equal only to itself)."""
+
+    __slots__ = ("obj",)
+
+    def __init__(self, obj: Any) -> None:
+        self.obj = obj
+
+    def __eq__(self, other: Any) -> bool:
+        return isinstance(other, ByIdentity) and other.obj is self.obj
+
+    def __hash__(self) -> int:
+        return id(self.obj)
+
+
+def callable_key(fn: Any) -> Any:
+    """Key of a loss or constraint function: the object itself (identity, as ``jax.jit`` keys a
+    function), a bound method by its function and ``__self__`` (so ``PIDTuning().loss`` built twice
+    with equal settings shares the key), ``None`` by value."""
+    if fn is None:
+        return None
+    if isinstance(fn, types.MethodType):
+        owner = fn.__self__
+        try:
+            hash(owner)
+        except TypeError:
+            owner = ByIdentity(owner)
+        return ("method", ByIdentity(fn.__func__), owner)
+    return ByIdentity(fn)
 
 
 class LRUCache:
