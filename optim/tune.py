@@ -14,11 +14,18 @@ bounds, positivity and orderings hold at every step.  General inequality constra
   violation to zero at a finite ``w`` (``w`` = ``penalty_weight``).
 
 Several starts (``n_starts``; start 0 is ``params0``, the others ``u0 + init_spread·N(0, 1)``) step
-together in one ``vmap``; every step is one jitted call, after which the host records the history,
-checks early stopping and calls ``callback``.  A start *converges* (and stops) when its gradient
-norm falls to ``gtol`` or its kept point has not improved by ``rtol`` (relative) for ``patience``
-steps; ``TuneResult.converged`` says whether the start returned did, as opposed to running out of
-steps, and ``message`` gives the last gradient norm.
+together in one ``vmap``; ``steps_per_call`` steps run on the device in one ``lax.scan`` (a chunk)
+that evaluates the stopping rules after every step and skips the remaining steps (``lax.cond``,
+no loss evaluation) once no start is running; the host syncs once per chunk, then records the
+history (the same records, step for step, as one step per call), updates the progress bar and
+replays ``callback`` over the chunk's steps.  The compiled chunk is cached across calls
+(:mod:`optim.compile_cache`): a second ``tune`` with the same loss object (or Problem), optimiser
+settings, reparametrisation, settings and shapes traces and compiles nothing.
+
+A start *converges* (and stops) when its gradient norm falls to ``gtol`` or its kept point has
+not improved by ``rtol`` (relative) for ``patience`` steps; ``TuneResult.converged`` says whether
+the start returned did, as opposed to running out of steps, and ``message`` gives the last
+gradient norm.
 
 Which point is kept: the evaluated iterate with the lowest objective — without constraints the
 loss; with ``"penalty"`` the penalised loss (the problem being solved); with
@@ -29,14 +36,22 @@ stops there (the others go on); the run stops when no start is left and says so 
 returning the best finite point.
 
 Gradients: ``mode="reverse"`` (``value_and_grad``) or ``"forward"`` (``jacfwd`` on the flattened
-``u``, the value comes with it); ``"auto"`` takes forward mode up to
-:data:`FORWARD_MODE_MAX_PARAMS` unconstrained parameters (the crossover measured by
-``experiments/benchmarks/ad_mode_crossover.py`` on a closed-loop PID loss).
+``u``, the value comes with it); ``"auto"`` (:func:`use_forward_mode`) takes forward mode while
+unconstrained parameters × starts ≤ :data:`FORWARD_MODE_MAX_PARAMS`: the vmapped starts multiply
+forward mode's tangent lanes, not reverse mode's single adjoint pass.
 
-Accounting: one loss evaluation (with its gradient, in either mode) counts ``sims_per_eval``
-simulations per start that is still running; optimisers with a line search (``optax.lbfgs``) add
-``sims_per_eval`` per line-search trial.  ``wall_s`` is the stepping time; the setup (initial
-state, tracing, compilation) is reported as ``compile_s``.
+Accounting: a gradient evaluation (loss and gradient, in either mode) of a start still running
+counts ``grad_cost`` loss evaluations (:func:`grad_cost`, measured once per problem) times
+``sims_per_eval``; a line-search trial (``optax.lbfgs``) counts one loss evaluation for a
+backtracking search and ``grad_cost`` for optax's zoom search (its trials evaluate the gradient).
+``n_sims`` sums these (loss-evaluation equivalents, comparable with the swarm's and the
+searches'); ``n_evals`` counts the evaluations themselves.  ``wall_s`` is the stepping time; the
+setup (initial state, tracing, compilation, the ``grad_cost`` measurement) is ``compile_s``.
+
+Optimisers: any optax transformation; ``method="lbfgs"`` (optax L-BFGS with a backtracking line
+search) converges in far fewer loss evaluations than Adam on smooth deterministic losses (the PID
+problem: see the issue-18 measurements); Adam (``optax.adam(1e-2)``) stays the default, since
+L-BFGS's line search stalls on losses with kinks (saturations, ``|e|`` in ITAE) and on noisy ones.
 """
 
 from __future__ import annotations
@@ -59,12 +74,15 @@ from optim.compile_cache import LRUCache, callable_key, key_or_none
 from optim.results import History, TuneResult, check_int, check_some_loss_finite
 
 FORWARD_MODE_MAX_PARAMS = 32
-"""``mode="auto"`` uses forward mode up to this many unconstrained parameters.
+"""``mode="auto"`` uses forward mode while unconstrained parameters × starts stay at most this.
 
 Measured on the 2-core CPU this project runs on (``experiments/benchmarks/ad_mode_crossover.py``,
-closed-loop PID loss, 300 ticks): forward mode was faster at every tested count up to 30 (4–8× at
-3 gains) and reverse mode took over between 36 and 96; 32 stays on the safe side for losses with
-heavier per-step work, where reverse mode's relative overhead is smaller."""
+closed-loop PID loss, 300 ticks, one start): forward mode was faster at every tested count up to 30
+(4–8× at 3 gains) and reverse mode took over between 36 and 96; 32 stays on the safe side for
+losses with heavier per-step work, where reverse mode's relative overhead is smaller.  With
+vmapped starts forward mode pushes parameters × starts tangent lanes through the rollout while
+reverse mode's cost grows with the starts alone: issue 18 measured reverse mode 1.3× faster than
+forward at 3 gains × 32 starts (96 lanes), consistent with the same threshold on the product."""
 
 Mode = Literal["auto", "forward", "reverse"]
 Method = Literal["adam", "lbfgs"]
@@ -508,10 +526,8 @@ def gradient_tuner(
             "executables": {},
         }
 
-    key = key_or_none(
-        "tuner", callable_key(r.loss), opt, r.reparam, callable_key(r.constraints), cfg._replace(sims_per_eval=0), n_starts, m_constraints,
-        steps_per_call, _u_avals(u_template),
-    )  # fmt: skip
+    static = (cfg._replace(sims_per_eval=0), n_starts, m_constraints, steps_per_call, _u_avals(u_template))
+    key = key_or_none("tuner", callable_key(r.loss), opt, r.reparam, callable_key(r.constraints), static)
     built = _TUNERS.get_or_build(key, build)
 
     def init(params0: Any = None, key: jax.Array | None = None) -> TunerState:
