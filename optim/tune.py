@@ -41,8 +41,10 @@ unconstrained parameters × starts ≤ :data:`FORWARD_MODE_MAX_PARAMS`: the vmap
 forward mode's tangent lanes, not reverse mode's single adjoint pass.
 
 Accounting: a gradient evaluation (loss and gradient, in either mode) of a start still running
-counts ``grad_cost`` loss evaluations (:func:`grad_cost`, measured once per problem) times
-``sims_per_eval``; a line-search trial (``optax.lbfgs``) counts one loss evaluation for a
+counts ``grad_cost`` loss evaluations times ``sims_per_eval`` — by default ``grad_cost = 1`` (an
+evaluation is an evaluation: reproducible counts); ``grad_cost="measure"`` measures what one
+gradient evaluation costs in loss evaluations (:func:`grad_cost`, wall-clock, once per problem and
+cached), or pass the number; a line-search trial (``optax.lbfgs``) counts one loss evaluation for a
 backtracking search and ``grad_cost`` for optax's zoom search (its trials evaluate the gradient).
 ``n_sims`` sums these (loss-evaluation equivalents, comparable with the swarm's and the
 searches'); ``n_evals`` counts the evaluations themselves.  ``wall_s`` is the stepping time; the
@@ -774,7 +776,7 @@ def tune(
     progress: Any = False,
     method: Method | None = None,
     steps_per_call: int = 32,
-    grad_cost: float | None = None,
+    grad_cost: float | str | None = None,
 ) -> TuneResult:
     """Minimise a :class:`~jaxsim.problem.Problem`'s loss (or ``loss(params)``) by gradient steps.
 
@@ -815,9 +817,10 @@ def tune(
         steps_per_call: steps run on the device per jitted call (one ``lax.scan``; the stopping
             rules are evaluated inside it and the host syncs once per chunk).  The result does not
             depend on it except through a callback's stop.
-        grad_cost: loss-evaluation equivalents of one gradient evaluation for the accounting
-            (``None``: :func:`grad_cost` measures it once per problem; give a number for
-            reproducible accounting without the measurement).
+        grad_cost: loss-evaluation equivalents of one gradient evaluation for the accounting:
+            ``None`` (default) counts it as 1 (reproducible: the counts do not depend on timing);
+            ``"measure"``: :func:`grad_cost` measures it once per problem (wall-clock ratio, cached;
+            its extra compilation is in ``compile_s``); or a number.
 
     Returns:
         :class:`~optim.results.TuneResult`; ``converged`` says whether the start kept met the
@@ -834,7 +837,12 @@ def tune(
     if callback is not None and not callable(callback):
         raise ValueError("callback: must be callable or None")
     steps = check_int("steps", steps)
-    if grad_cost is not None:
+    if grad_cost is None:
+        grad_cost = 1.0
+    elif isinstance(grad_cost, str):
+        if grad_cost != "measure":
+            raise ValueError(f"grad_cost: must be None, 'measure' or a positive number, got {grad_cost!r}")
+    else:
         grad_cost = _check_number("grad_cost", grad_cost)
     t0 = time.perf_counter()
     tuner = gradient_tuner(
@@ -861,7 +869,7 @@ def tune(
     carry = tuner.init(None, key)
     exe = tuner.compiled(carry)
     mode_name = "forward" if cfg.use_forward else "reverse"
-    if grad_cost is None:
+    if grad_cost == "measure":
         grad_cost = _grad_cost(loss, params0, reparam=reparam, mode=mode_name)
     cost = (grad_cost, grad_cost if tuner.linesearch_trial_is_gradient else 1.0)
     compile_s = time.perf_counter() - t0

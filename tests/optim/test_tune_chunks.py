@@ -115,5 +115,7 @@ def test_lbfgs_by_name_and_its_accounting():
         tune(rosen, jnp.zeros(2), method="newton")
     with pytest.raises(ValueError, match="grad_cost"):
         tune(rosen, jnp.zeros(2), grad_cost=0.0)
+    with pytest.raises(ValueError, match="grad_cost: must be None, 'measure' or a positive number"):
+        tune(rosen, jnp.zeros(2), grad_cost="measured")
     with pytest.raises(ValueError, match="steps_per_call"):
         tune(rosen, jnp.zeros(2), steps_per_call=0)
