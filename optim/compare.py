@@ -5,7 +5,9 @@
 ``compare({"gradient": lambda: tune(...), "pso": lambda: pso(...), ...})`` runs any zero-argument
 callables.  Each tuner runs once and its history is read (every tuner returns
 :class:`optim.results.TuneResult`, with ``best_loss``, ``sims`` and ``wall_s`` per step).  The
-harness reports what each used and, for the equal-budget view, the best loss each tuner had
+harness reports what each used — simulations; with ``grad_cost="measure"`` in loss-evaluation
+equivalents, so a gradient evaluation counts what it costs (:func:`optim.tune.grad_cost`, several
+loss evaluations), not one — and, for the equal-budget view, the best loss each tuner had
 reached by the smallest budget any of them used — of simulations (``loss_at_common_sims``) and of
 seconds (``loss_at_common_seconds``).
 
@@ -79,13 +81,17 @@ def standard_tuners(
     init_spread: float = 1.0,
     n_particles: int = 32,
     batch_size: int = 256,
+    grad_cost: float | str | None = None,
     progress: Any = False,
 ) -> dict[str, Callable[[], Any]]:
     """Zero-argument runs of the standard tuners on ``problem``, each given ``budget`` simulations.
 
     * ``gradient``: :func:`optim.tune`, Adam(``learning_rate``) in the space's reparametrisation,
       ``n_starts`` starts (start 0 at ``space.init``, the others spread by ``init_spread``),
-      ``budget // (n_starts·S)`` steps (``S`` = scenarios per loss evaluation);
+      ``⌊budget / (n_starts·S·c)⌋`` steps (at least 1; ``S`` = scenarios per loss evaluation,
+      ``c`` = what one gradient evaluation costs in loss evaluations: ``grad_cost`` — 1 by default
+      (reproducible), ``"measure"`` (:func:`optim.tune.grad_cost`, wall-clock, once per problem) or
+      a number): its ``n_sims`` counts the same loss-evaluation equivalents;
     * ``pso``: :func:`optim.pso`, ``n_particles`` particles, ``budget // (n_particles·S)`` iterations;
     * ``random``: :func:`optim.random_search`, ``budget // S`` points (batches of ``batch_size``);
     * ``grid``: :func:`optim.grid_search`, ``⌊(budget/S)^{1/d}⌋`` points per dimension;
@@ -100,6 +106,7 @@ def standard_tuners(
     """
     from optim.pso import pso
     from optim.search import grid_search, random_search
+    from optim.tune import grad_cost as measure_grad_cost
     from optim.tune import tune
 
     def _cmaes(*args: Any, **kw: Any) -> Any:  # evosax (the cmaes extra) only when asked for
@@ -116,17 +123,28 @@ def standard_tuners(
         raise ValueError(f"budget: must be a positive integer number of simulations, got {budget!r}")
     key = jax.random.PRNGKey(0) if key is None else key
     evals = int(budget) // problem.sims_per_eval
-    d = problem.space.dim
-    makers = {
-        "gradient": lambda: tune(
+
+    def gradient(c: float) -> Any:
+        steps = max(1, int(evals // (n_starts * c)))
+        return tune(
             problem,
             optimizer=optax.adam(learning_rate),
-            steps=evals // n_starts,
+            steps=steps,
             n_starts=n_starts,
             key=key,
             init_spread=init_spread,
+            grad_cost=c,
             progress=progress,
-        ),
+        )
+
+    def cost() -> float:
+        if grad_cost == "measure":
+            return measure_grad_cost(problem, n_starts=n_starts)
+        return 1.0 if grad_cost is None else float(grad_cost)
+
+    d = problem.space.dim
+    makers = {
+        "gradient": lambda: gradient(cost()),
         "pso": lambda: pso(problem, n_particles=n_particles, n_iters=evals // n_particles, key=key, progress=progress),
         "random": lambda: random_search(problem, n=evals, key=key, batch_size=batch_size),
         "grid": lambda: grid_search(

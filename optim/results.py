@@ -37,13 +37,17 @@ class TuneResult(NamedTuple):
     params: the best point (the params pytree of a Problem, or ``params0``'s structure for
     :func:`optim.tune`, or the point ``(d,)`` of a search over a plain box); loss: its loss (without
     penalty terms for the gradient tuner; the searches' penalised loss); history: :class:`History`;
-    n_sims: simulations used; wall_s: seconds of stepping (compile excluded); compile_s: setup and
+    n_sims: simulations used, in loss-evaluation equivalents (a gradient evaluation counts what it costs
+    in loss evaluations); wall_s: seconds of stepping (compile excluded); compile_s: setup and
     compilation; converged: whether the tuner's convergence test was met (``tune``: gradient norm or
     relative improvement; ``pso``: swarm collapsed or no improvement for ``patience`` iterations;
     random and grid search have none: ``False``), not merely that the budget ran out; message: why
     it stopped.  Gradient tuner only: start_index (the start that found ``params``), constraint_violation
     ``Σ max(0, g)`` at ``params``, multipliers (augmented Lagrangian), n_steps, mode ("forward" /
-    "reverse").  u: the point in the tuner's own coordinates (unconstrained for ``tune``, search
+    "reverse"), n_evals (gradient evaluations plus line-search trials, each × scenarios per loss
+    evaluation; ``n_sims`` is the same in loss-evaluation equivalents), grad_cost (loss-evaluation
+    equivalents of one gradient evaluation, :func:`optim.tune.grad_cost`).  u: the point in the
+    tuner's own coordinates (unconstrained for ``tune``, search
     coordinates for the searches).
     """
 
@@ -61,6 +65,8 @@ class TuneResult(NamedTuple):
     multipliers: Any = None
     n_steps: int = 0
     mode: str = ""
+    n_evals: int = 0
+    grad_cost: float = 1.0
 
     @property
     def x(self) -> Any:

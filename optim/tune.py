@@ -14,11 +14,18 @@ bounds, positivity and orderings hold at every step.  General inequality constra
   violation to zero at a finite ``w`` (``w`` = ``penalty_weight``).
 
 Several starts (``n_starts``; start 0 is ``params0``, the others ``u0 + init_spread·N(0, 1)``) step
-together in one ``vmap``; every step is one jitted call, after which the host records the history,
-checks early stopping and calls ``callback``.  A start *converges* (and stops) when its gradient
-norm falls to ``gtol`` or its kept point has not improved by ``rtol`` (relative) for ``patience``
-steps; ``TuneResult.converged`` says whether the start returned did, as opposed to running out of
-steps, and ``message`` gives the last gradient norm.
+together in one ``vmap``; ``steps_per_call`` steps run on the device in one ``lax.scan`` (a chunk)
+that evaluates the stopping rules after every step and skips the remaining steps (``lax.cond``,
+no loss evaluation) once no start is running; the host syncs once per chunk, then records the
+history (the same records, step for step, as one step per call), updates the progress bar and
+replays ``callback`` over the chunk's steps.  The compiled chunk is cached across calls
+(:mod:`optim.compile_cache`): a second ``tune`` with the same loss object (or Problem), optimiser
+settings, reparametrisation, settings and shapes traces and compiles nothing.
+
+A start *converges* (and stops) when its gradient norm falls to ``gtol`` or its kept point has
+not improved by ``rtol`` (relative) for ``patience`` steps; ``TuneResult.converged`` says whether
+the start returned did, as opposed to running out of steps, and ``message`` gives the last
+gradient norm.
 
 Which point is kept: the evaluated iterate with the lowest objective — without constraints the
 loss; with ``"penalty"`` the penalised loss (the problem being solved); with
@@ -29,18 +36,29 @@ stops there (the others go on); the run stops when no start is left and says so 
 returning the best finite point.
 
 Gradients: ``mode="reverse"`` (``value_and_grad``) or ``"forward"`` (``jacfwd`` on the flattened
-``u``, the value comes with it); ``"auto"`` takes forward mode up to
-:data:`FORWARD_MODE_MAX_PARAMS` unconstrained parameters (the crossover measured by
-``experiments/benchmarks/ad_mode_crossover.py`` on a closed-loop PID loss).
+``u``, the value comes with it); ``"auto"`` (:func:`use_forward_mode`) takes forward mode while
+unconstrained parameters × starts ≤ :data:`FORWARD_MODE_MAX_PARAMS`: the vmapped starts multiply
+forward mode's tangent lanes, not reverse mode's single adjoint pass.
 
-Accounting: one loss evaluation (with its gradient, in either mode) counts ``sims_per_eval``
-simulations per start that is still running; optimisers with a line search (``optax.lbfgs``) add
-``sims_per_eval`` per line-search trial.  ``wall_s`` is the stepping time; the setup (initial
-state, tracing, compilation) is reported as ``compile_s``.
+Accounting: a gradient evaluation (loss and gradient, in either mode) of a start still running
+counts ``grad_cost`` loss evaluations times ``sims_per_eval`` — by default ``grad_cost = 1`` (an
+evaluation is an evaluation: reproducible counts); ``grad_cost="measure"`` measures what one
+gradient evaluation costs in loss evaluations (:func:`grad_cost`, wall-clock, once per problem and
+cached), or pass the number; a line-search trial (``optax.lbfgs``) counts one loss evaluation for a
+backtracking search and ``grad_cost`` for optax's zoom search (its trials evaluate the gradient).
+``n_sims`` sums these (loss-evaluation equivalents, comparable with the swarm's and the
+searches'); ``n_evals`` counts the evaluations themselves.  ``wall_s`` is the stepping time; the
+setup (initial state, tracing, compilation, the ``grad_cost`` measurement) is ``compile_s``.
+
+Optimisers: any optax transformation; ``method="lbfgs"`` (optax L-BFGS with a backtracking line
+search) converges in far fewer loss evaluations than Adam on smooth deterministic losses (the PID
+problem: see the issue-18 measurements); Adam (``optax.adam(1e-2)``) stays the default, since
+L-BFGS's line search stalls on losses with kinks (saturations, ``|e|`` in ITAE) and on noisy ones.
 """
 
 from __future__ import annotations
 
+import functools
 import time
 from typing import Any, Callable, Literal, NamedTuple
 
@@ -54,17 +72,22 @@ from jaxsim.core.progress import postfix, progress_bar
 from jaxsim.core.validation import check_finite
 from jaxsim.problem import Problem
 from jaxsim.problem.reparam import apply, check_domain, invert
+from optim.compile_cache import LRUCache, callable_key, key_or_none
 from optim.results import History, TuneResult, check_int, check_some_loss_finite
 
 FORWARD_MODE_MAX_PARAMS = 32
-"""``mode="auto"`` uses forward mode up to this many unconstrained parameters.
+"""``mode="auto"`` uses forward mode while unconstrained parameters × starts stay at most this.
 
 Measured on the 2-core CPU this project runs on (``experiments/benchmarks/ad_mode_crossover.py``,
-closed-loop PID loss, 300 ticks): forward mode was faster at every tested count up to 30 (4–8× at
-3 gains) and reverse mode took over between 36 and 96; 32 stays on the safe side for losses with
-heavier per-step work, where reverse mode's relative overhead is smaller."""
+closed-loop PID loss, 300 ticks, one start): forward mode was faster at every tested count up to 30
+(4–8× at 3 gains) and reverse mode took over between 36 and 96; 32 stays on the safe side for
+losses with heavier per-step work, where reverse mode's relative overhead is smaller.  With
+vmapped starts forward mode pushes parameters × starts tangent lanes through the rollout while
+reverse mode's cost grows with the starts alone: issue 18 measured reverse mode 1.3× faster than
+forward at 3 gains × 32 starts (96 lanes), consistent with the same threshold on the product."""
 
 Mode = Literal["auto", "forward", "reverse"]
+Method = Literal["adam", "lbfgs"]
 ConstraintMethod = Literal["penalty", "augmented_lagrangian"]
 
 
@@ -235,7 +258,7 @@ def _make_step(objective: Callable, opt: optax.GradientTransformation, reparam: 
 
 
 def _initial_carry(
-    key: jax.Array, u0: Any, opt: optax.GradientTransformation, n_starts: int, spread: float, m_constraints: int
+    key: jax.Array, u0: Any, spread: jax.Array, opt: optax.GradientTransformation, n_starts: int, m_constraints: int
 ) -> TunerState:
     """Start 0 is ``u0``, the others ``u0 + spread·N(0, 1)``; strong dtypes so the step compiles once."""
     v0, unravel = ravel_pytree(u0)
@@ -259,13 +282,60 @@ def _initial_carry(
     return jax.tree_util.tree_map(lambda a: jnp.array(a, dtype=a.dtype), carry)
 
 
+def _best_of(best_f: Any, best_v: Any, best_m: Any, tol: float, feasible_first: bool) -> tuple[jax.Array, jax.Array]:
+    """The start whose kept point ranks first, and that point's loss (jnp: on the device or the host).
+
+    With ``feasible_first`` (augmented Lagrangian), feasible finite points are ranked by the loss
+    when there is one; otherwise every start by its merit."""
+    f, v, m = jnp.asarray(best_f), jnp.asarray(best_v), jnp.asarray(best_m)
+    cand = m
+    if feasible_first:
+        feasible = v <= tol
+        cand = jnp.where(jnp.any(feasible & jnp.isfinite(f)), jnp.where(feasible, f, jnp.inf), m)
+    i = jnp.argmin(cand)
+    return i, f[i]
+
+
+class ChunkInfo(NamedTuple):
+    """What one chunk of :func:`gradient_tuner` steps evaluated (leading axis ``L`` = chunk length):
+    ``step`` the :class:`StepInfo` of every step (``(L, S, …)``), ``best_loss (L,)`` the loss of the
+    best kept point after each step, ``ran (L,)`` whether the step ran (a prefix of ``True``: the
+    chunk stops stepping once no start is running or the requested steps are done)."""
+
+    step: StepInfo
+    best_loss: jax.Array
+    ran: jax.Array
+
+
+def _make_chunk(step: Callable, cfg: _Settings, length: int) -> Callable:
+    """``chunk(state, remaining) -> (state, ChunkInfo)``: up to ``min(length, remaining)`` steps in
+    one ``lax.scan``; a step whose turn comes after every start stopped (or after ``remaining``) is
+    skipped by ``lax.cond`` (no loss evaluation) and marked ``ran = False``."""
+
+    def chunk(state: TunerState, remaining: jax.Array) -> tuple[TunerState, ChunkInfo]:
+        blank = jax.tree_util.tree_map(lambda s: jnp.zeros(s.shape, s.dtype), jax.eval_shape(step, state)[1])
+
+        def body(c: TunerState, k: jax.Array):
+            go = jnp.any(c.alive & c.active) & (k < remaining)
+            new, info = jax.lax.cond(go, step, lambda s: (s, blank), c)
+            return new, ChunkInfo(info, _best_of(new.best_f, new.best_v, new.best_m, cfg.tol, cfg.al)[1], go)
+
+        return jax.lax.scan(body, state, jnp.arange(length))
+
+    return chunk
+
+
 class Tuner(NamedTuple):
-    """The optax-like pure pair of :func:`gradient_tuner` (plus a host-side reader).
+    """The optax-like pure pair of :func:`gradient_tuner` (plus a chunked driver and a host-side reader).
 
     init(params0=None, key=None) -> TunerState: ``S`` starts (start 0 at ``params0``, default the
     problem's ``space.init``); step(state) -> (state, StepInfo): one jitted step of every start;
+    chunk(state, remaining) -> (state, ChunkInfo): ``steps_per_call`` steps in one jitted
+    ``lax.scan`` with on-device stopping (:class:`ChunkInfo`);
     best(state) -> (params, loss, start): the best point kept so far (host side, NumPy).
-    ``settings``, ``reparam``, ``n_starts``: what the pair was built with.
+    ``settings``, ``reparam``, ``n_starts``, ``steps_per_call``: what the pair was built with;
+    ``linesearch_trial_is_gradient``: whether a line-search trial of the optimiser evaluates the
+    gradient too (optax's zoom line search) or only the loss (backtracking), for the accounting.
     """
 
     init: Callable[..., TunerState]
@@ -274,6 +344,10 @@ class Tuner(NamedTuple):
     settings: _Settings
     reparam: Any
     n_starts: int
+    chunk: Callable[[TunerState, Any], tuple[TunerState, ChunkInfo]] | None = None
+    steps_per_call: int = 1
+    linesearch_trial_is_gradient: bool = True
+    compiled: Callable[[TunerState], Callable] | None = None
 
 
 class _Resolved(NamedTuple):
@@ -324,6 +398,58 @@ def _as_float_tree(params0: Any) -> Any:
     return jax.tree_util.tree_map(lambda a: jnp.asarray(a, dtype=jnp.result_type(a, float)), params0)
 
 
+def use_forward_mode(n_params: int, n_starts: int = 1) -> bool:
+    """The ``mode="auto"`` cost model: forward mode iff ``n_params·n_starts ≤``
+    :data:`FORWARD_MODE_MAX_PARAMS` (the tangent lanes forward mode pushes through the rollout;
+    see the constant for the measurements behind it)."""
+    return n_params * n_starts <= FORWARD_MODE_MAX_PARAMS
+
+
+def optimizer_for(method: Method | None, optimizer: Any) -> optax.GradientTransformation:
+    """The optimiser ``tune`` runs: ``optimizer`` if given, else the one ``method`` names
+    (``"adam"``: ``optax.adam(1e-2)``, the default; ``"lbfgs"``: ``optax.lbfgs`` with a
+    backtracking (Armijo) line search halving the step, at most 30 trials, each one loss
+    evaluation)."""
+    if optimizer is not None:
+        if method is not None:
+            raise ValueError(f"method: give either method or optimizer, not both (method={method!r})")
+        return optimizer
+    if method is None or method == "adam":
+        return optax.adam(1e-2)
+    if method == "lbfgs":
+        # halving, not optax's default factor 0.8: 20 trials of 0.8 shrink the step only to 1 %, too
+        # little on Rosenbrock's valley, where the search then fails and L-BFGS stalls
+        return optax.lbfgs(
+            linesearch=optax.scale_by_backtracking_linesearch(max_backtracking_steps=30, decrease_factor=0.5)
+        )
+    raise ValueError(f"method: must be 'adam' or 'lbfgs', got {method!r}")
+
+
+def _trial_is_gradient(opt: optax.GradientTransformation, u_template: Any) -> bool:
+    """Whether a line-search trial of ``opt`` costs a gradient (zoom) or one loss (backtracking)."""
+    state = jax.eval_shape(opt.init, u_template)
+    found = []
+
+    def visit(x: Any) -> bool:
+        if isinstance(x, optax.ScaleByBacktrackingLinesearchState):
+            found.append(x)
+            return True
+        return False
+
+    jax.tree_util.tree_leaves(state, is_leaf=visit)
+    return not found
+
+
+_TUNERS = LRUCache()
+"""Compiled tuners, keyed on (loss, optimiser, reparametrisation, constraints, settings, starts,
+chunk length, parameter shapes): a second ``tune`` with the same ones compiles nothing."""
+
+
+def _u_avals(u_template: Any) -> tuple:
+    leaves, treedef = jax.tree_util.tree_flatten(u_template)
+    return treedef, tuple((leaf.shape, str(leaf.dtype)) for leaf in leaves)
+
+
 def gradient_tuner(
     loss: Problem | Callable[[Any], jax.Array],
     optimizer: optax.GradientTransformation | None = None,
@@ -342,6 +468,8 @@ def gradient_tuner(
     gtol: float = 0.0,
     sims_per_eval: int | None = None,
     mode: Mode = "auto",
+    steps_per_call: int = 1,
+    method: Method | None = None,
 ) -> Tuner:
     """The gradient tuner as a pure pair ``(init, step)`` a user can drive from their own loop::
 
@@ -352,10 +480,14 @@ def gradient_tuner(
         params, loss, start = tuner.best(state)
 
     Arguments as in :func:`tune` (``params0`` here only fixes the structure and the ``"auto"`` mode
-    choice; a Problem's ``space.init`` by default).  :func:`tune` is this pair plus the host loop.
+    choice; a Problem's ``space.init`` by default).  :func:`tune` is this pair plus the host loop,
+    driving ``tuner.chunk`` (``steps_per_call`` steps per jitted call).  Pairs built with the same
+    loss object, optimiser settings, reparametrisation, constraints, settings and shapes share their
+    compiled functions (:mod:`optim.compile_cache`).
     """
     r = _resolve(loss, params0, reparam, constraints, sims_per_eval, penalty_weight)
     n_starts = check_int("n_starts", n_starts)
+    steps_per_call = check_int("steps_per_call", steps_per_call)
     if patience is not None:
         patience = check_int("patience", patience)
     spread = _check_number("init_spread", init_spread, allow_zero=True)
@@ -363,7 +495,7 @@ def gradient_tuner(
         raise ValueError(f"constraint_method: must be 'penalty' or 'augmented_lagrangian', got {constraint_method!r}")
     if mode not in ("auto", "forward", "reverse"):
         raise ValueError(f"mode: must be 'auto', 'forward' or 'reverse', got {mode!r}")
-    opt = optax.adam(1e-2) if optimizer is None else optimizer
+    opt = optimizer_for(method, optimizer)
     if not (hasattr(opt, "init") and hasattr(opt, "update")):
         raise ValueError(f"optimizer: must be an optax.GradientTransformation, got {type(opt).__name__}")
     template = _as_float_tree(r.params0)
@@ -377,16 +509,28 @@ def gradient_tuner(
         patience=patience,
         multiplier_every=check_int("multiplier_every", multiplier_every),
         al=r.constraints is not None and constraint_method == "augmented_lagrangian",
-        use_forward=mode == "forward" or (mode == "auto" and n_params <= FORWARD_MODE_MAX_PARAMS),
+        use_forward=mode == "forward" or (mode == "auto" and use_forward_mode(n_params, n_starts)),
         sims_per_eval=check_int("sims_per_eval", r.sims_per_eval),
     )
     m_constraints = 0
     if r.constraints is not None:
         g = jax.eval_shape(lambda u: jnp.ravel(jnp.asarray(r.constraints(apply(r.reparam, u)))), u_template)
         m_constraints = int(np.prod(g.shape))
-    objective = _make_objective(r.loss, r.reparam, r.constraints, cfg)
-    make_carry = jax.jit(_initial_carry, static_argnums=(2, 3, 4, 5))
-    step = jax.jit(jax.vmap(_make_step(objective, opt, r.reparam, cfg)))
+
+    def build() -> dict:
+        objective = _make_objective(r.loss, r.reparam, r.constraints, cfg)
+        one = jax.vmap(_make_step(objective, opt, r.reparam, cfg))
+        return {
+            "init": jax.jit(functools.partial(_initial_carry, opt=opt, n_starts=n_starts, m_constraints=m_constraints)),
+            "step": jax.jit(one),
+            "chunk": jax.jit(_make_chunk(one, cfg, steps_per_call)),
+            "trial_is_gradient": _trial_is_gradient(opt, u_template),
+            "executables": {},
+        }
+
+    static = (cfg._replace(sims_per_eval=0), n_starts, m_constraints, steps_per_call, _u_avals(u_template))
+    key = key_or_none("tuner", callable_key(r.loss), opt, r.reparam, callable_key(r.constraints), static)
+    built = _TUNERS.get_or_build(key, build)
 
     def init(params0: Any = None, key: jax.Array | None = None) -> TunerState:
         x0 = template if params0 is None else _as_float_tree(params0)
@@ -394,14 +538,28 @@ def gradient_tuner(
         check_domain(r.reparam, x0, "params0")
         u0 = invert(r.reparam, x0)
         check_finite("params0 (in unconstrained space)", u0)
-        return make_carry(jax.random.PRNGKey(0) if key is None else key, u0, opt, n_starts, spread, m_constraints)
+        u0 = jax.tree_util.tree_map(lambda a, t: jnp.asarray(a, t.dtype), u0, u_template)
+        k = jax.random.PRNGKey(0) if key is None else key
+        return built["init"](k, u0, jnp.asarray(spread, ravel_pytree(u0)[0].dtype))
+
+    def compiled(state: TunerState) -> Callable:
+        """The AOT-compiled chunk for ``state``'s shapes (compiled once, then reused)."""
+        sig = jax.tree_util.tree_structure(state), tuple((a.shape, a.dtype) for a in jax.tree_util.tree_leaves(state))
+        exe = built["executables"].get(sig)
+        if exe is None:
+            exe = built["chunk"].lower(state, jnp.asarray(0, jnp.int32)).compile()
+            built["executables"][sig] = exe
+        return exe
 
     def best(state: TunerState) -> tuple[Any, float, int]:
         idx, best_loss = _best_index_and_loss(state, cfg.tol, cfg.al)
         u = jax.tree_util.tree_map(lambda a: a[idx], state.best_u)
         return apply(r.reparam, u), best_loss, idx
 
-    return Tuner(init, step, best, cfg, r.reparam, n_starts)
+    return Tuner(
+        init, built["step"], best, cfg, r.reparam, n_starts, built["chunk"], steps_per_call,
+        built["trial_is_gradient"], compiled,
+    )  # fmt: skip
 
 
 class _Records(NamedTuple):
@@ -410,42 +568,71 @@ class _Records(NamedTuple):
     violation: list
     best: list
     sims: list
+    evals: list
     wall: list
 
 
-def _run_steps(
-    step_fn: Callable, carry: TunerState, steps: int, cfg: _Settings, callback: Callable | None, bar: Any
+def _run_chunks(
+    tuner: Tuner,
+    exe: Callable,
+    carry: TunerState,
+    steps: int,
+    cost: tuple[float, float],
+    callback: Callable | None,
+    bar: Any,
 ) -> tuple[TunerState, _Records, str, bool]:
-    """The host loop: one jitted step per iteration, records, callback and stopping.
+    """The host loop: one compiled chunk per iteration, then records, callback replay and stopping.
 
+    ``cost``: loss-evaluation equivalents of one gradient evaluation and of one line-search trial.
     Returns ``(state, records, reason, stopped_by_callback)``."""
-    rec = _Records([], [], [], [], [], [])
-    sims, reason = 0, ""
+    cfg = tuner.settings
+    rec = _Records([], [], [], [], [], [], [])
+    sims, evals, reason, done, last = 0.0, 0, "", 0, 0.0
     start = time.perf_counter()
-    for k in range(steps):
-        carry, out = step_fn(carry)
-        host = jax.device_get(out._replace(x=None))
-        sims += int(np.sum(host.evals)) * cfg.sims_per_eval
-        rec.f.append(host.f)
-        rec.grad_norm.append(host.grad_norm)
-        rec.violation.append(host.violation)
-        rec.best.append(_best_index_and_loss(carry, cfg.tol, cfg.al)[1])
-        rec.sims.append(sims)
-        rec.wall.append(time.perf_counter() - start)
-        bar.update(1)
-        postfix(bar, f"best {rec.best[-1]:.6g}")
-        f_now = np.where(host.ran & host.finite, host.f, np.inf)
-        if callback is not None and np.any(np.isfinite(f_now)):
-            i = int(np.argmin(f_now))
-            if callback(k, jax.tree_util.tree_map(lambda a: a[i], out.x), float(f_now[i])):
-                return carry, rec, f"stopped by callback at step {k}", True
+    while done < steps:
+        carry, out = exe(carry, jnp.asarray(steps - done, jnp.int32))
+        host = jax.device_get(out)
+        now = time.perf_counter() - start
+        n = int(np.sum(host.ran))
+        info = host.step
+        for j in range(n):
+            ran = np.asarray(info.ran[j], bool)
+            trials = np.asarray(info.evals[j]) - ran
+            evals += int(np.sum(info.evals[j])) * cfg.sims_per_eval
+            sims += (float(np.sum(ran)) * cost[0] + float(np.sum(trials)) * cost[1]) * cfg.sims_per_eval
+            rec.f.append(info.f[j])
+            rec.grad_norm.append(info.grad_norm[j])
+            rec.violation.append(info.violation[j])
+            rec.best.append(float(host.best_loss[j]))
+            rec.sims.append(sims)
+            rec.evals.append(evals)
+            rec.wall.append(last + (now - last) * (j + 1) / n)
+        last = now
+        bar.update(n)
+        if n:
+            postfix(bar, f"best {rec.best[-1]:.6g}")
+        stop_at = None
+        if callback is not None:
+            for j in range(n):
+                f_now = np.where(info.ran[j] & info.finite[j], info.f[j], np.inf)
+                if not np.any(np.isfinite(f_now)):
+                    continue
+                i = int(np.argmin(f_now))
+                x = jax.tree_util.tree_map(lambda a: a[j, i], info.x)
+                if callback(done + j, x, float(f_now[i])):
+                    stop_at = done + j
+                    break
+        done += n
+        if stop_at is not None:
+            return carry, rec, f"stopped by callback at step {stop_at}", True
         alive, active = np.asarray(carry.alive), np.asarray(carry.active)
         if not np.any(alive & active):
             if not np.all(alive):
-                reason = f"stopped at step {k}: every start stopped"
+                reason = f"stopped at step {done - 1}: every start stopped"
             else:
                 reason = (
-                    f"early stop at step {k}: converged (patience={cfg.patience}, rtol={cfg.rtol:g}, gtol={cfg.gtol:g})"
+                    f"early stop at step {done - 1}: converged (patience={cfg.patience}, rtol={cfg.rtol:g}, "
+                    f"gtol={cfg.gtol:g})"
                 )
             break
     return carry, rec, reason, False
@@ -457,7 +644,7 @@ def _history(rec: _Records) -> History:
     rows, pick = np.arange(len(rec.f)), np.argmin(f_masked, axis=1)
     return History(
         best_loss=np.asarray(rec.best, float),
-        sims=np.asarray(rec.sims),
+        sims=np.asarray(rec.sims, float),
         wall_s=np.asarray(rec.wall),
         loss=f_masked[rows, pick],
         grad_norm=g_hist[rows, pick],
@@ -500,6 +687,71 @@ def _convergence(
     return False, f"{reason}; last gradient norm {last_g:.3g} (start {idx})"
 
 
+_GRAD_COSTS = LRUCache(128)
+"""Measured :func:`grad_cost` values, keyed like :data:`_TUNERS` (loss, reparametrisation, mode, shapes)."""
+
+
+def _time_call(fn: Callable, arg: Any, min_seconds: float = 0.005) -> float:
+    """Seconds per call of ``fn(arg)`` (blocked), averaged over enough calls to last ``min_seconds``."""
+    jax.block_until_ready(fn(arg))
+    n, t = 1, 0.0
+    while True:
+        t0 = time.perf_counter()
+        for _ in range(n):
+            out = fn(arg)
+        jax.block_until_ready(out)
+        t = time.perf_counter() - t0
+        if t >= min_seconds or n >= 1 << 16:
+            return t / n
+        n *= 2 if t <= 0 else max(2, min(64, int(np.ceil(1.5 * min_seconds / t))))  # aim past min_seconds
+
+
+def grad_cost(
+    loss: Problem | Callable[[Any], jax.Array],
+    params0: Any = None,
+    *,
+    reparam: Any = None,
+    mode: Mode = "auto",
+    n_starts: int = 1,
+    rounds: int = 5,
+) -> float:
+    """Cost of one gradient evaluation (the value and the gradient, in the mode ``tune`` would use)
+    in units of one loss evaluation: ``t(value_and_grad) / t(loss)``, both jitted for one start at
+    ``params0`` (a Problem's ``space.init``), the minimum over ``rounds`` interleaved timing rounds
+    (each averaging ≥ 5 ms of calls), at least 1.
+
+    Measured once per (loss object, reparametrisation, mode, shapes) and cached: the first call
+    compiles the loss and its ``value_and_grad`` (on the PID problem about 1 s here), later calls
+    return the cached number.  ``mode="auto"`` resolves as in :func:`tune` with ``n_starts``.
+    Measured on this project's 2-core CPU for :class:`optim.problems.PIDTuning` (3 gains, 300
+    ticks): forward mode about 7–8.5, reverse mode 27–31 loss evaluations (issue 18)."""
+    r = _resolve(loss, params0, reparam, None, None, None)
+    if mode not in ("auto", "forward", "reverse"):
+        raise ValueError(f"mode: must be 'auto', 'forward' or 'reverse', got {mode!r}")
+    x0 = _as_float_tree(r.params0)
+    check_finite("params0", x0)
+    check_domain(r.reparam, x0, "params0")
+    u0 = invert(r.reparam, x0)
+    n_params = int(sum(np.size(leaf) for leaf in jax.tree_util.tree_leaves(u0)))
+    forward = mode == "forward" or (mode == "auto" and use_forward_mode(n_params, check_int("n_starts", n_starts)))
+
+    def measure() -> float:
+        def objective(u: Any, lam: jax.Array):
+            j = jnp.asarray(r.loss(apply(r.reparam, u)))
+            return j, ()
+
+        value = jax.jit(lambda u: objective(u, None)[0])
+        vg = jax.jit(lambda u: _make_value_and_grad(objective, forward)(u, None))
+        t_f, t_g = [], []
+        for _ in range(check_int("rounds", rounds)):
+            t_f.append(_time_call(value, u0))
+            t_g.append(_time_call(vg, u0))
+        return max(1.0, min(t_g) / min(t_f))
+
+    key = key_or_none("grad_cost", callable_key(r.loss), r.reparam, forward, _u_avals(u0))
+    return float(_GRAD_COSTS.get_or_build(key, measure))
+
+
 def tune(
     loss: Problem | Callable[[Any], jax.Array],
     params0: Any = None,
@@ -522,6 +774,9 @@ def tune(
     sims_per_eval: int | None = None,
     mode: Mode = "auto",
     progress: Any = False,
+    method: Method | None = None,
+    steps_per_call: int = 32,
+    grad_cost: float | str | None = None,
 ) -> TuneResult:
     """Minimise a :class:`~jaxsim.problem.Problem`'s loss (or ``loss(params)``) by gradient steps.
 
@@ -530,9 +785,10 @@ def tune(
             evaluation and ``penalty_weight`` are the defaults of the arguments below), or a plain
             ``params -> scalar`` function, pure and differentiable (jitted by the tuner).
         params0: pytree of arrays inside the domain of ``reparam`` (required for a plain loss).
-        optimizer: any ``optax.GradientTransformation`` (default ``optax.adam(1e-2)``); line-search
-            optimisers (``optax.lbfgs``) receive ``value``, ``grad`` and ``value_fn``.
-        steps: maximum number of loss evaluations per start.
+        optimizer: any ``optax.GradientTransformation`` (default: the one ``method`` names); line-search
+            optimisers (``optax.lbfgs``, a ``GradientTransformationExtraArgs``) receive ``value``,
+            ``grad`` and ``value_fn``.
+        steps: maximum number of steps (gradient evaluations) per start.
         reparam: pytree of :mod:`jaxsim.problem.reparam` objects (a prefix of ``params0``); None:
             identity (a Problem: its space's).
         constraints: ``params -> g``; feasible iff every ``g ≤ 0``.
@@ -544,22 +800,51 @@ def tune(
         patience, rtol: a start stops (converged) once its kept point has not improved by more than
             ``rtol`` (relative) for ``patience`` steps (None: never).
         gtol: a start stops (converged) once its gradient norm (in ``u``-space) is ≤ ``gtol``.
-        callback: ``callback(step, params, loss) -> stop`` after every step, with the current
-            iterate of the start with the lowest current loss; a true return value stops the run.
+        callback: ``callback(step, params, loss) -> stop``, called for every step with the iterate
+            of the start with the lowest loss at that step — after the chunk holding the step has
+            run (in step order, once per step).  A true return value stops the run at the end of
+            that chunk: the steps the chunk ran after it stay in the history and the result
+            (``steps_per_call=1`` stops at the step itself).
         sims_per_eval: simulations one loss evaluation costs (accounting only; default 1, a
             Problem's number of scenarios).
-        mode: ``"auto"``, ``"forward"`` or ``"reverse"`` gradient.
-        progress: ``True`` for a tqdm bar (steps, best loss), or a bar factory
-            (:mod:`jaxsim.core.progress`).
+        mode: ``"auto"`` (:func:`use_forward_mode`: forward mode while parameters × starts ≤
+            :data:`FORWARD_MODE_MAX_PARAMS`), ``"forward"`` or ``"reverse"`` gradient.
+        progress: ``True`` for a tqdm bar (steps, best loss; updated once per chunk), or a bar
+            factory (:mod:`jaxsim.core.progress`).
+        method: ``"adam"`` (``optax.adam(1e-2)``, the default) or ``"lbfgs"`` (``optax.lbfgs``
+            with a backtracking line search; for smooth deterministic losses), when ``optimizer``
+            is not given.
+        steps_per_call: steps run on the device per jitted call (one ``lax.scan``; the stopping
+            rules are evaluated inside it and the host syncs once per chunk).  The result does not
+            depend on it except through a callback's stop.
+        grad_cost: loss-evaluation equivalents of one gradient evaluation for the accounting:
+            ``None`` (default) counts it as 1 (reproducible: the counts do not depend on timing);
+            ``"measure"``: :func:`grad_cost` measures it once per problem (wall-clock ratio, cached;
+            its extra compilation is in ``compile_s``); or a number.
 
     Returns:
         :class:`~optim.results.TuneResult`; ``converged`` says whether the start kept met the
         convergence test (``gtol`` / ``patience``) rather than running out of steps, and
-        ``message`` gives the reason and the last gradient norm.
+        ``message`` gives the reason and the last gradient norm.  Accounting: ``n_steps`` steps;
+        ``n_evals`` evaluations (one gradient evaluation per running start and step, plus every
+        line-search trial), each × ``sims_per_eval``; ``n_sims`` the same in loss-evaluation
+        equivalents — a gradient evaluation counts ``grad_cost`` (:attr:`TuneResult.grad_cost`),
+        a backtracking line-search trial 1, a zoom line-search trial ``grad_cost`` — so it
+        compares with the swarms' and searches' ``n_sims``; ``history.sims`` is its running sum.
+        ``compile_s`` holds the setup: initial state, compilation (0 on a second call with the
+        same loss object, settings and shapes) and the ``grad_cost`` measurement.
     """
     if callback is not None and not callable(callback):
         raise ValueError("callback: must be callable or None")
     steps = check_int("steps", steps)
+    if grad_cost is None:
+        grad_cost = 1.0
+    elif isinstance(grad_cost, str):
+        if grad_cost != "measure":
+            raise ValueError(f"grad_cost: must be None, 'measure' or a positive number, got {grad_cost!r}")
+    else:
+        grad_cost = _check_number("grad_cost", grad_cost)
+    t0 = time.perf_counter()
     tuner = gradient_tuner(
         loss,
         optimizer,
@@ -577,17 +862,22 @@ def tune(
         gtol=gtol,
         sims_per_eval=sims_per_eval,
         mode=mode,
+        steps_per_call=steps_per_call,
+        method=method,
     )
     cfg = tuner.settings
-    t0 = time.perf_counter()
     carry = tuner.init(None, key)
-    tuner.step.lower(carry).compile()  # cached by jit for the loop below
+    exe = tuner.compiled(carry)
+    mode_name = "forward" if cfg.use_forward else "reverse"
+    if grad_cost == "measure":
+        grad_cost = _grad_cost(loss, params0, reparam=reparam, mode=mode_name)
+    cost = (grad_cost, grad_cost if tuner.linesearch_trial_is_gradient else 1.0)
     compile_s = time.perf_counter() - t0
 
     name = loss.name if isinstance(loss, Problem) else "loss"
     bar = progress_bar(progress, total=steps, desc=f"tune {name}", unit="step")
     try:
-        carry, rec, reason, by_callback = _run_steps(tuner.step, carry, steps, cfg, callback, bar)
+        carry, rec, reason, by_callback = _run_chunks(tuner, exe, carry, steps, cost, callback, bar)
     finally:
         bar.close()
     wall = rec.wall[-1]
@@ -605,7 +895,7 @@ def tune(
         params=apply(tuner.reparam, best_u),
         loss=float(best_loss),
         history=history,
-        n_sims=int(rec.sims[-1]),
+        n_sims=int(round(rec.sims[-1])),
         wall_s=float(wall),
         compile_s=float(compile_s),
         converged=converged,
@@ -617,19 +907,16 @@ def tune(
         else 0.0,
         multipliers=np.asarray(carry.lam[idx]) if cfg.al else None,
         n_steps=len(rec.f),
-        mode="forward" if cfg.use_forward else "reverse",
+        mode=mode_name,
+        n_evals=int(rec.evals[-1]),
+        grad_cost=float(grad_cost),
     )
 
 
+_grad_cost = grad_cost  # ``tune``'s argument of the same name shadows the function
+
+
 def _best_index_and_loss(carry: TunerState, tol: float, feasible_first: bool) -> tuple[int, float]:
-    """The start whose kept point ranks first, and that point's loss."""
-    f = np.asarray(carry.best_f)
-    v = np.asarray(carry.best_v)
-    m = np.asarray(carry.best_m)
-    feasible = v <= tol
-    if feasible_first and np.any(feasible & np.isfinite(f)):
-        cand = np.where(feasible, f, np.inf)
-    else:
-        cand = m
-    i = int(np.argmin(cand))
-    return i, float(f[i])
+    """The start whose kept point ranks first, and that point's loss (host side)."""
+    i, f = _best_of(np.asarray(carry.best_f), np.asarray(carry.best_v), np.asarray(carry.best_m), tol, feasible_first)
+    return int(i), float(f)

@@ -18,7 +18,8 @@ def test_compare_records_budgets_and_equal_budget_losses():
     finished = []
     comp = compare(
         {
-            "gradient": lambda: tune(loss, jnp.zeros(2), optimizer=optax.adam(0.05), steps=100),
+            # grad_cost=1: a gradient evaluation counted as one simulation (fixed numbers for the harness)
+            "gradient": lambda: tune(loss, jnp.zeros(2), optimizer=optax.adam(0.05), steps=100, grad_cost=1.0),
             "pso": lambda: pso(loss, lo, hi, n_particles=10, n_iters=30, key=jax.random.PRNGKey(1)),
             "random": lambda: random_search(loss, lo, hi, n=500, batch_size=100),
         },

@@ -85,7 +85,15 @@ def test_searches_on_the_problems_box():
 def test_compare_gives_each_standard_tuner_the_same_budget():
     comp = compare(PROBLEM, tuners=("gradient", "pso", "random"), budget=256, n_particles=16, n_starts=4)
     sims = {r["tuner"]: r["sims"] for r in comp.rows}
-    assert sims == {"gradient": 256, "pso": 256, "random": 256}
+    assert sims["pso"] == 256 and sims["random"] == 256 and sims["gradient"] == 256  # an evaluation is one
+    assert comp.results["gradient"].n_steps == 64 and comp.results["gradient"].grad_cost == 1.0
+    # measured cost: the gradient tuner's steps are the budget over what 4 starts' gradient evaluations cost
+    comp = compare(PROBLEM, tuners=("gradient",), budget=256, n_starts=4, grad_cost="measure")
+    sims = {r["tuner"]: r["sims"] for r in comp.rows}
+    grad = comp.results["gradient"]
+    assert grad.grad_cost > 1.0
+    assert grad.n_steps == 256 // (4 * grad.grad_cost) and sims["gradient"] == round(4 * grad.n_steps * grad.grad_cost)
+    assert 256 - 4 * grad.grad_cost < sims["gradient"] <= 256
     row = next(r for r in comp.rows if r["tuner"] == "gradient")
     assert set(row["params"]) == {"kp", "ki", "e[0]", "e[1]"} and "converged" in row
     with pytest.raises(ValueError, match="budget: required"):
@@ -100,7 +108,10 @@ def test_a_problem_with_scenarios_counts_every_scenario_as_a_simulation():
     )
     assert pb.sims_per_eval == 3
     res = tune(pb, optimizer=optax.adam(0.1), steps=10)
-    assert res.n_sims == 30
+    assert res.n_evals == 30 == res.n_sims and res.grad_cost == 1.0
+    res = tune(pb, optimizer=optax.adam(0.1), steps=10, grad_cost="measure")
+    assert res.n_evals == 30 and res.grad_cost >= 1.0 and res.n_sims == round(30 * res.grad_cost)
+    assert tune(pb, optimizer=optax.adam(0.1), steps=10, grad_cost=2.5).n_sims == 75
     assert pso(pb, n_particles=4, n_iters=5).n_sims == 60
     worst = robust_loss(pb, {"c": jnp.asarray([0.0, 4.0])}, reducer=lambda v: jnp.max(v))
     assert float(worst.loss({"kp": jnp.asarray(1.0), "ki": 1.0, "e": jnp.asarray([0.5, 0.8])})) == 9.0
