@@ -26,7 +26,6 @@ Kalman–Bucy observer — and no numbers; every number here is an assumption li
 from __future__ import annotations
 
 import dataclasses
-import time
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -45,6 +44,7 @@ from jaxsim.problem.reparam import Identity
 from jaxsim.problem.trms import PERTURBED, TRMSTuning
 from jaxsim.problem.trms import Scenario as TRMSScenario
 from optim import pso, random_search, tune
+from optim.tune import grad_cost
 
 STATE_LABELS = ("ψ", "φ", "ψ̇", "φ̇", "τ1", "τ2", "M_R")
 THETA_LABELS = (*(f"Q_{s}" for s in STATE_LABELS), "R_u1", "R_u2", *(f"W_{s}" for s in STATE_LABELS))
@@ -232,7 +232,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     seed_rows = stages.seed_rows_within(seed_rows, n_sims_grad, "best_loss_within_gradient_sims")
     curve, pso_best = cmp.comparison.curves["gradient"], float(res["pso"].loss)
     reached = np.nonzero(curve.best_loss <= pso_best)[0]
-    ratio = _gradient_cost_ratio(tr) if cfg.measure_gradient_cost else float("nan")
+    ratio = grad_cost(problem, mode="forward") if cfg.measure_gradient_cost else float("nan")
     metrics = {
         "loss_start": by["bryson_start"]["loss"],
         "search_seeds": cfg.search_seeds,
@@ -309,23 +309,6 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         figures={**cmp.figures, **responses, **robustness.figures},
         notes=[*cmp.notes, *robustness.notes, *notes],
     )
-
-
-def _gradient_cost_ratio(tr: TRMSTuning, repeats: int = 3) -> float:
-    """Wall time of one loss + forward-mode gradient over one loss evaluation (both jitted; medians)."""
-    th = jnp.asarray(tr.bryson_theta())
-    f, g = jax.jit(tr.loss), jax.jit(lambda t: (tr.loss(t), jax.jacfwd(tr.loss)(t)))
-    jax.block_until_ready((f(th), g(th)))
-
-    def median_s(fn: Callable) -> float:
-        ts = []
-        for _ in range(repeats):
-            t = time.perf_counter()
-            jax.block_until_ready(fn(th))
-            ts.append(time.perf_counter() - t)
-        return sorted(ts)[len(ts) // 2]
-
-    return median_s(g) / median_s(f)
 
 
 STUDY = Study(
