@@ -87,11 +87,15 @@ def test_compare_gives_each_standard_tuner_the_same_budget():
     sims = {r["tuner"]: r["sims"] for r in comp.rows}
     assert sims["pso"] == 256 and sims["random"] == 256 and sims["gradient"] == 256  # an evaluation is one
     assert comp.results["gradient"].n_steps == 64 and comp.results["gradient"].grad_cost == 1.0
-    # measured cost: the gradient tuner's steps are the budget over what 4 starts' gradient evaluations cost
+    # a stated cost: the gradient tuner's steps are the budget over what 4 starts' gradient evaluations cost
+    comp = compare(PROBLEM, tuners=("gradient",), budget=256, n_starts=4, grad_cost=2.5)
+    grad, sims = comp.results["gradient"], {r["tuner"]: r["sims"] for r in comp.rows}
+    assert grad.n_steps == 25 and sims["gradient"] == 250 and grad.n_evals == 100
+    # a measured cost (a wall-clock ratio, at least 1): the same arithmetic
     comp = compare(PROBLEM, tuners=("gradient",), budget=256, n_starts=4, grad_cost="measure")
     sims = {r["tuner"]: r["sims"] for r in comp.rows}
     grad = comp.results["gradient"]
-    assert grad.grad_cost > 1.0
+    assert grad.grad_cost >= 1.0
     assert grad.n_steps == 256 // (4 * grad.grad_cost) and sims["gradient"] == round(4 * grad.n_steps * grad.grad_cost)
     assert 256 - 4 * grad.grad_cost < sims["gradient"] <= 256
     row = next(r for r in comp.rows if r["tuner"] == "gradient")
