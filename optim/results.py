@@ -38,8 +38,8 @@ class TuneResult(NamedTuple):
     :func:`optim.tune`, or the point ``(d,)`` of a search over a plain box); loss: its loss (without
     penalty terms for the gradient tuner; the searches' penalised loss); history: :class:`History`;
     n_sims: simulations used (loss evaluations × scenarios; for ``tune`` a gradient evaluation counts
-    ``grad_cost`` of them: 1 by default, its measured cost with ``grad_cost="measure"``); wall_s: seconds of stepping (compile excluded); compile_s: setup and
-    compilation; converged: whether the tuner's convergence test was met (``tune``: gradient norm or
+    ``grad_cost`` of them: 1 by default, its measured cost with ``grad_cost="measure"``); wall_s:
+    seconds of stepping (compile excluded); compile_s: setup and compilation; converged: whether the tuner's convergence test was met (``tune``: gradient norm or
     relative improvement; ``pso``: swarm collapsed or no improvement for ``patience`` iterations;
     random and grid search have none: ``False``), not merely that the budget ran out; message: why
     it stopped.  Gradient tuner only: start_index (the start that found ``params``), constraint_violation
