@@ -39,16 +39,16 @@ class TuneResult(NamedTuple):
     penalty terms for the gradient tuner; the searches' penalised loss); history: :class:`History`;
     n_sims: simulations used (loss evaluations × scenarios; for ``tune`` a gradient evaluation counts
     ``grad_cost`` of them: 1 by default, its measured cost with ``grad_cost="measure"``); wall_s:
-    seconds of stepping (compile excluded); compile_s: setup and compilation; converged: whether the tuner's convergence test was met (``tune``: gradient norm or
-    relative improvement; ``pso``: swarm collapsed or no improvement for ``patience`` iterations;
-    random and grid search have none: ``False``), not merely that the budget ran out; message: why
-    it stopped.  Gradient tuner only: start_index (the start that found ``params``), constraint_violation
-    ``Σ max(0, g)`` at ``params``, multipliers (augmented Lagrangian), n_steps, mode ("forward" /
-    "reverse"), n_evals (gradient evaluations plus line-search trials, each × scenarios per loss
-    evaluation; ``n_sims`` is the same in loss-evaluation equivalents), grad_cost (loss-evaluation
-    equivalents of one gradient evaluation: 1, given, or measured by :func:`optim.tune.grad_cost`).  u: the point in the
-    tuner's own coordinates (unconstrained for ``tune``, search
-    coordinates for the searches).
+    seconds of stepping (compile excluded); compile_s: setup and compilation; converged: whether
+    the tuner's convergence test was met (``tune``: gradient norm or relative improvement; ``pso``:
+    swarm collapsed or no improvement for ``patience`` iterations; random and grid search have
+    none: ``False``), not merely that the budget ran out; message: why it stopped.  Gradient tuner
+    only: start_index (the start that found ``params``), constraint_violation ``Σ max(0, g)`` at
+    ``params``, multipliers (augmented Lagrangian), n_steps, mode ("forward" / "reverse"), n_evals
+    (gradient evaluations plus line-search trials, each × scenarios per loss evaluation; ``n_sims``
+    weighs them by ``grad_cost``), grad_cost (loss-evaluation equivalents of one gradient
+    evaluation: 1, given, or measured by :func:`optim.tune.grad_cost`).  u: the point in the
+    tuner's own coordinates (unconstrained for ``tune``, search coordinates for the searches).
     """
 
     params: Any
