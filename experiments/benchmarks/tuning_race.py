@@ -127,16 +127,17 @@ def pid_problem() -> Problem:
 
 def fuzzy_problem() -> Problem:
     """The study's smooth characteristic with its constraint penalty folded into the loss."""
-    from experiments.fuzzy_pid_tuning import Config, Loop, char_of, three_section_space
+    from experiments.fuzzy_pid_tuning import Config
+    from jaxsim.problem.fuzzy_tuning import FuzzyPTuning, three_section_of
 
     cfg = Config()
-    loop = Loop(cfg)
+    loop = FuzzyPTuning(cfg)
 
     def loss(p, draw, key):
-        f, h, _ = loop.terms(char_of(p, cfg.smooth_temperature, "smooth"), smooth=True)
+        f, h, _ = loop.terms(three_section_of(p, cfg.smooth_temperature, "smooth"), smooth=True)
         return f + 0.5 * cfg.penalty_weight * jnp.sum(jnp.maximum(h, 0.0) ** 2)
 
-    return Problem.from_loss("fuzzy_p_smooth_penalised", three_section_space(cfg), loss)
+    return Problem.from_loss("fuzzy_p_smooth_penalised", loop.three_section_space(), loss)
 
 
 def trms_problem(t_final: float) -> Problem:

@@ -8,6 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+import experiments.benchmarks.tuning_race as tr
 from experiments.benchmarks.tuning_race import (
     Budget,
     race,
@@ -77,3 +78,11 @@ def test_a_tiny_race_end_to_end(tmp_path):
     assert json.loads((tmp_path / "tuning_race.json").read_text())["summary"][0]["problem"] == "bowl"
     assert [r["tuner"] for r in csv.DictReader(open(tmp_path / "tuning_race.csv"))] == ["pso", "random"]
     assert (tmp_path / "tuning_race.png").stat().st_size > 0
+
+
+def test_every_race_problem_builds_from_the_studies_and_the_library():
+    """The race imports its problems from the studies and ``jaxsim.problem``: a moved name fails here,
+    not in a long benchmark run."""
+    problems = tr.build_problems(["pid", "fuzzy", "trms"], trms_t_final=2.0)
+    assert {n: p.space.dim for n, p in problems.items()} == {"pid": 3, "fuzzy": 4, "trms": 16}
+    assert problems["fuzzy"].name == "fuzzy_p_smooth_penalised"
