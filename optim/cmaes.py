@@ -31,9 +31,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxsim.core.progress import postfix, progress_bar
+from jaxsim.core.progress import progress_bar
 from jaxsim.problem import Problem
-from optim.pso import _chunk_size, handle_bounds
+from optim.pso import _chunk_size, handle_bounds, run_in_chunks
 from optim.results import History, TuneResult, as_box, check_int, check_some_loss_finite
 
 RepairMode = Literal["reflect", "clip"]
@@ -219,21 +219,9 @@ def cmaes(
     _jitted_generations.lower(state, lo, hi, **static).compile()  # cached by jit for the loop below
     compile_s = time.perf_counter() - t0
 
-    best, now_min, wall = np.empty(iters), np.empty(iters), np.empty(iters)
     bar = progress_bar(progress, total=iters, desc=f"cmaes {problem.name if problem else 'loss'}", unit="gen")
-    start, last = time.perf_counter(), 0.0
-    try:
-        for i in range(0, iters, chunk):
-            state, (best_i, now_i) = _jitted_generations(state, lo, hi, **static)
-            best[i : i + chunk] = np.asarray(best_i)
-            now_min[i : i + chunk] = np.asarray(now_i)
-            now = time.perf_counter() - start
-            wall[i : i + chunk] = last + (now - last) * np.arange(1, chunk + 1) / chunk
-            last = now
-            bar.update(chunk)
-            postfix(bar, f"best {best[i + chunk - 1]:.6g}")
-    finally:
-        bar.close()
+    step = lambda s: _jitted_generations(s, lo, hi, **static)  # noqa: E731  (positional, as compiled above)
+    state, best, now_min, wall = run_in_chunks(step, state, iters, chunk, bar)
     check_some_loss_finite(
         best[-1], f"{popsize} candidates × {iters} generations", "check the loss over the box lo..hi"
     )

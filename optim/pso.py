@@ -195,6 +195,35 @@ def _chunk_size(n_iters: int, iters_per_call: int) -> int:
     return max(c for c in range(1, min(iters_per_call, n_iters) + 1) if n_iters % c == 0)
 
 
+def run_in_chunks(
+    step: Callable[[Any], tuple[Any, tuple[jax.Array, jax.Array]]],
+    state: Any,
+    n_iters: int,
+    chunk: int,
+    bar: Any,
+) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray]:
+    """The host loop of a population tuner: ``step(state) -> (state, (best, now_min))`` runs ``chunk``
+    iterations on the device (each ``(chunk,)``: best loss so far, the iteration's minimum); called
+    ``n_iters / chunk`` times.  Returns the final state and ``best, now_min, wall`` ``(n_iters,)``,
+    ``wall`` (s) interpolated linearly inside each chunk; ``bar`` (a progress bar) is advanced per
+    chunk and closed."""
+    best, now_min, wall = np.empty(n_iters), np.empty(n_iters), np.empty(n_iters)
+    start, last = time.perf_counter(), 0.0
+    try:
+        for i in range(0, n_iters, chunk):
+            state, (best_i, now_i) = step(state)
+            best[i : i + chunk] = np.asarray(best_i)
+            now_min[i : i + chunk] = np.asarray(now_i)
+            now = time.perf_counter() - start
+            wall[i : i + chunk] = last + (now - last) * np.arange(1, chunk + 1) / chunk
+            last = now
+            bar.update(chunk)
+            postfix(bar, f"best {best[i + chunk - 1]:.6g}")
+    finally:
+        bar.close()
+    return state, best, now_min, wall
+
+
 def swarm_convergence(
     state: SwarmState,
     best: np.ndarray,
@@ -295,22 +324,10 @@ def pso(
     state = pso_init(jax.random.PRNGKey(0) if key is None else key, lo, hi, cfg)
     _jitted_steps.lower(state, lo, hi, **static).compile()  # cached by jit for the loop below
     compile_s = time.perf_counter() - t0
-    best, now_min, wall = np.empty(cfg.n_iters), np.empty(cfg.n_iters), np.empty(cfg.n_iters)
     name = problem.name if problem is not None else "loss"
     bar = progress_bar(progress, total=cfg.n_iters, desc=f"pso {name}", unit="iter")
-    start, last = time.perf_counter(), 0.0
-    try:
-        for i in range(0, cfg.n_iters, chunk):
-            state, (best_i, now_i) = _jitted_steps(state, lo, hi, **static)
-            best[i : i + chunk] = np.asarray(best_i)
-            now_min[i : i + chunk] = np.asarray(now_i)
-            now = time.perf_counter() - start
-            wall[i : i + chunk] = last + (now - last) * np.arange(1, chunk + 1) / chunk
-            last = now
-            bar.update(chunk)
-            postfix(bar, f"best {best[i + chunk - 1]:.6g}")
-    finally:
-        bar.close()
+    step = lambda s: _jitted_steps(s, lo, hi, **static)  # noqa: E731  (positional, as compiled above)
+    state, best, now_min, wall = run_in_chunks(step, state, cfg.n_iters, chunk, bar)
     check_some_loss_finite(
         best[-1], f"{cfg.n_particles} particles × {cfg.n_iters} iterations", "check the loss over the box lo..hi"
     )
