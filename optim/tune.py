@@ -519,10 +519,11 @@ def gradient_tuner(
 
     def build() -> dict:
         objective = _make_objective(r.loss, r.reparam, r.constraints, cfg)
-        one = jax.vmap(_make_step(objective, opt, r.reparam, cfg))
+        # jitted, so the chunk's shape probe and its ``lax.cond`` share one trace of the step
+        one = jax.jit(jax.vmap(_make_step(objective, opt, r.reparam, cfg)))
         return {
             "init": jax.jit(functools.partial(_initial_carry, opt=opt, n_starts=n_starts, m_constraints=m_constraints)),
-            "step": jax.jit(one),
+            "step": one,
             "chunk": jax.jit(_make_chunk(one, cfg, steps_per_call)),
             "trial_is_gradient": _trial_is_gradient(opt, u_template),
             "executables": {},

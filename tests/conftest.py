@@ -1,4 +1,11 @@
-"""Test configuration: float64, JAX's persistent compilation cache, shared helpers."""
+"""Test configuration: float64, the compilation cache, shared helpers.
+
+JAX's persistent compilation cache is off unless ``JAXSIM_TEST_CACHE=DIR`` names a folder (for this
+process and every interpreter a test spawns): in a cold run of the suite it was read back for 43 of
+its 764 entries, and writing an entry once crashed a worker in CI (a segmentation fault inside
+``executable.serialize()``, jax 0.9.2).  For repeated local runs,
+``JAXSIM_TEST_CACHE=.jax_cache make test`` reuses what the last run compiled.
+"""
 
 from __future__ import annotations
 
@@ -9,12 +16,28 @@ import jax
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-CACHE_DIR = Path(os.environ.get("JAXSIM_TEST_CACHE", ROOT / ".jax_cache"))
+CACHE_DIR = Path(os.environ["JAXSIM_TEST_CACHE"]).resolve() if os.environ.get("JAXSIM_TEST_CACHE") else None
 
 jax.config.update("jax_enable_x64", True)
-jax.config.update("jax_compilation_cache_dir", str(CACHE_DIR))
-jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
-jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+if CACHE_DIR is not None:
+    jax.config.update("jax_compilation_cache_dir", str(CACHE_DIR))
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
+    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+
+
+def child_env(**extra: str) -> dict[str, str]:
+    """The environment for an interpreter a test spawns (a CLI run, a README block, a worker): this
+    one's, the repository on ``PYTHONPATH``, the suite's cache setting (the CLI's own cache off when
+    the suite's is), then ``extra``."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    env.pop("JAX_COMPILATION_CACHE_DIR", None)
+    if CACHE_DIR is None:
+        env["JAXSIM_CACHE_DIR"] = ""
+    else:
+        env.pop("JAXSIM_CACHE_DIR", None)
+        env["JAX_COMPILATION_CACHE_DIR"] = str(CACHE_DIR)
+    return {**env, **extra}
+
 
 import jaxsim  # noqa: E402,F401  (precision set up in one place)
 

@@ -5,15 +5,14 @@ drift from the code)."""
 
 from __future__ import annotations
 
-import os
 import re
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+from tests.conftest import ROOT, child_env
+
 BLOCK = re.compile(r"^```python\n(.*?)^```", re.S | re.M)
 EXCERPT = re.compile(r"# excerpt of (\S+)")
 COMMENT = re.compile(r"\s+#.*$")  # an end-of-line comment (the README may annotate an excerpt)
@@ -47,11 +46,7 @@ def test_readme_block(line, code, tmp_path):
             assert hits, f"README.md:{line}: {wanted!r} not found (in order) in {excerpt.group(1)}"
             pos = hits[0] + 1
         return
-    env = {
-        **os.environ,
-        "JAX_COMPILATION_CACHE_DIR": os.environ.get("JAXSIM_TEST_CACHE", str(ROOT / ".jax_cache")),
-        "PYTHONPATH": str(ROOT),
-    }
+    env = child_env()
     proc = subprocess.run(
         [sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=600, check=False
     )

@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
 
-from tests.conftest import CACHE_DIR, ROOT
+from tests.conftest import ROOT, child_env
 
 
 def run_quick_study(name: str, out: Path, *extra: str, preset: str = "quick", timeout: float = 900) -> dict:
@@ -20,7 +19,7 @@ def run_quick_study(name: str, out: Path, *extra: str, preset: str = "quick", ti
         text=True,
         cwd=ROOT,
         timeout=timeout,
-        env={**os.environ, "JAX_COMPILATION_CACHE_DIR": str(CACHE_DIR)},
+        env=child_env(),
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     return json.loads((Path(out) / "results.json").read_text())

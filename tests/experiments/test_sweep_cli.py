@@ -3,7 +3,6 @@ resume through the CLI, and the CLI's refusals (exit code 2, nothing written).""
 
 import csv
 import json
-import os
 import subprocess
 import sys
 
@@ -14,7 +13,7 @@ from scipy import stats
 import jaxsim.montecarlo as mc
 from experiments.cli import main
 from experiments.noisy_pid_mc import STUDY
-from tests.conftest import CACHE_DIR, ROOT
+from tests.conftest import ROOT, child_env
 
 ARGS = ["sweep", "noisy_pid_mc", "--quick", "--param", "kp=0.4:1.2:3", "--runs", "1500", "--chunk", "1000"]
 
@@ -22,7 +21,7 @@ ARGS = ["sweep", "noisy_pid_mc", "--quick", "--param", "kp=0.4:1.2:3", "--runs",
 @pytest.fixture(scope="module")
 def two_device_sweep(tmp_path_factory):
     out = tmp_path_factory.mktemp("cli") / "sweep"
-    env = {**os.environ, "JAX_COMPILATION_CACHE_DIR": str(CACHE_DIR)}
+    env = child_env()
     env["XLA_FLAGS"] = " ".join(f for f in env.get("XLA_FLAGS", "").split() if "device_count" not in f)
     proc = subprocess.run(
         [sys.executable, "-m", "experiments", *ARGS, "--devices", "2", "--keep-runs", "3", "--out", str(out)],
@@ -145,7 +144,7 @@ def test_the_readme_multi_host_commands_on_loopback_match_one_device(tmp_path, o
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-    env = {**os.environ, "JAX_COMPILATION_CACHE_DIR": str(CACHE_DIR)}
+    env = child_env()
     env["XLA_FLAGS"] = " ".join(f for f in env.get("XLA_FLAGS", "").split() if "device_count" not in f)
     procs = [
         subprocess.Popen(

@@ -1,7 +1,6 @@
 """Scale-out in separate processes: 2 host devices, two ``jax.distributed`` processes on loopback,
 and a sweep killed with SIGKILL then resumed — all bitwise identical to one uninterrupted process."""
 
-import os
 import signal
 import socket
 import subprocess
@@ -12,7 +11,7 @@ import numpy as np
 import pytest
 
 import jaxsim.montecarlo as mc
-from tests.conftest import CACHE_DIR, ROOT
+from tests.conftest import ROOT, child_env
 from tests.montecarlo import _worker
 from tests.montecarlo._demo import SPACE, demo_fn
 
@@ -20,7 +19,7 @@ pytestmark = pytest.mark.slow
 
 
 def _env(devices=None):
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "JAX_COMPILATION_CACHE_DIR": str(CACHE_DIR)}
+    env = child_env()
     flags = " ".join(f for f in env.get("XLA_FLAGS", "").split() if "device_count" not in f)
     if devices is not None:
         flags += f" --xla_force_host_platform_device_count={devices}"
