@@ -1,6 +1,6 @@
 """The trms_lqr_tuning study through the CLI: the tiny preset with a --set override (the config
-recorded is the one that ran), equal budgets, consistent tables, the reproduction table; the brax PPO
-baseline in a separate slow run."""
+recorded is the one that ran), equal budgets, consistent tables, the reproduction table and the brax
+PPO baseline — all from one run (a study run costs about a minute of compilation)."""
 
 import math
 
@@ -16,7 +16,7 @@ def _run(out, *settings):
 @pytest.fixture(scope="module")
 def study_output(tmp_path_factory):
     out = tmp_path_factory.mktemp("trms")
-    return out, _run(out, "gradient_steps=3")
+    return out, _run(out, "gradient_steps=3", "ppo_timesteps=100000")
 
 
 def test_config_is_what_ran_and_budgets_are_equal(study_output):
@@ -58,10 +58,9 @@ def test_tables_agree_and_claims_are_checked(study_output):
         assert res["assumptions"][key]["why"], key
 
 
-@pytest.mark.slow
-def test_ppo_baseline_row(tmp_path):
+def test_ppo_baseline_row(study_output):
     """The brax PPO baseline ran with its stated budget and was scored with the study's loss."""
-    res = _run(tmp_path, "gradient_steps=3", "ppo_timesteps=100000")
+    _, res = study_output
     m, cfg = res["metrics"], res["config"]
     n_ticks = round(cfg["t_final"] / cfg["ts"])
     assert m["env_steps_rl_ppo"] >= cfg["ppo_timesteps"] == 100_000
