@@ -29,9 +29,10 @@ install-test: $(VENV)/.test
 run: $(VENV)/.core
 	$(PY) -m experiments run linear_pid_accuracy --out $(OUT)
 
-# one worker per core; a test file stays on one worker so its compiled functions are reused
+# one worker per core; a test file stays on one worker so its compiled functions are reused;
+# the 25 slowest tests are listed at the end (the suite's time is mostly compilation)
 test: $(VENV)/.test
-	$(PY) -m pytest -n auto --dist loadfile
+	$(PY) -m pytest -n auto --dist loadfile --durations=25
 
 # ruff lint and format check (configured in pyproject.toml)
 lint: $(VENV)/.test
