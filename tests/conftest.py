@@ -18,6 +18,10 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 CACHE_DIR = Path(os.environ["JAXSIM_TEST_CACHE"]).resolve() if os.environ.get("JAXSIM_TEST_CACHE") else None
 
+# The CLI run in-process by some tests (``experiments.cli.main``) turns on its own cache from this
+# variable; without it, that worker would go on writing every compilation to ~/.cache/jaxsim.
+os.environ["JAXSIM_CACHE_DIR"] = "" if CACHE_DIR is None else str(CACHE_DIR)
+
 jax.config.update("jax_enable_x64", True)
 if CACHE_DIR is not None:
     jax.config.update("jax_compilation_cache_dir", str(CACHE_DIR))

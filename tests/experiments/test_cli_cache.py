@@ -60,3 +60,18 @@ def test_cli_cache_writes_to_jaxsim_cache_dir_or_the_callers_jax_dir(tmp_path):
     off = tmp_path / "off"
     _run({"JAXSIM_CACHE_DIR": "", "JAX_COMPILATION_CACHE_DIR": str(off)})
     assert not off.exists() or not any(off.iterdir())
+
+
+def test_the_cli_run_in_process_follows_the_suites_cache_setting():
+    """``experiments.cli.main`` called inside a test worker must not switch on the user's cache folder
+    (a worker that did wrote every later compilation to ~/.cache/jaxsim, and one such write crashed)."""
+    import jax
+
+    from experiments.cli import enable_compilation_cache
+    from tests.conftest import CACHE_DIR
+
+    enable_compilation_cache()
+    if CACHE_DIR is None:
+        assert not jax.config.jax_enable_compilation_cache
+    else:
+        assert jax.config.jax_compilation_cache_dir == str(CACHE_DIR)
