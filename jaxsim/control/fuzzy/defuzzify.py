@@ -112,12 +112,11 @@ def sort_along_first_axis(keys: jax.Array, *payloads: jax.Array) -> tuple[jax.Ar
     if n > SORTING_NETWORK_MAX:
         return jax.lax.sort((keys, *payloads), dimension=0, num_keys=1)
     size = 1 << max(n - 1, 0).bit_length()
+    pad = lambda a, v: jnp.concatenate([a, jnp.full((size - n, *a.shape[1:]), v, a.dtype)])  # noqa: E731
+    cols = [pad(keys, jnp.inf)] + [pad(p, 0) for p in payloads]
     layers = _batcher_layers(size)
     if size <= UNROLLED_NETWORK_MAX:
-        rows = [
-            [*a, *[jnp.full(a.shape[1:], v, a.dtype)] * (size - n)]
-            for a, v in ((keys, jnp.inf), *((p, 0) for p in payloads))
-        ]
+        rows = [list(c) for c in cols]
         for partner, low in layers:
             for a in np.flatnonzero(low):
                 b = partner[a]
@@ -125,8 +124,6 @@ def sort_along_first_axis(keys: jax.Array, *payloads: jax.Array) -> tuple[jax.Ar
                 for r in rows:
                     r[a], r[b] = jnp.where(swap, r[b], r[a]), jnp.where(swap, r[a], r[b])
         return tuple(jnp.stack(r[:n]) for r in rows)
-    pad = lambda a, v: jnp.concatenate([a, jnp.full((size - n, *a.shape[1:]), v, a.dtype)])  # noqa: E731
-    cols = [pad(keys, jnp.inf)] + [pad(p, 0) for p in payloads]
     trailing = (1,) * (keys.ndim - 1)
     for partner, low in layers:
         other = cols[0][partner]
