@@ -31,14 +31,11 @@ if CACHE_DIR is not None:
 
 def child_env(**extra: str) -> dict[str, str]:
     """The environment for an interpreter a test spawns (a CLI run, a README block, a worker): this
-    one's, the repository on ``PYTHONPATH``, the suite's cache setting (the CLI's own cache off when
-    the suite's is), then ``extra``."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    env.pop("JAX_COMPILATION_CACHE_DIR", None)
-    if CACHE_DIR is None:
-        env["JAXSIM_CACHE_DIR"] = ""
-    else:
-        env.pop("JAXSIM_CACHE_DIR", None)
+    one's (so ``JAXSIM_CACHE_DIR`` as set above, for a CLI), the repository on ``PYTHONPATH``, JAX's
+    own cache folder only when the suite has one (for plain scripts), then ``extra``."""
+    env = {k: v for k, v in os.environ.items() if k != "JAX_COMPILATION_CACHE_DIR"}
+    env["PYTHONPATH"] = str(ROOT)
+    if CACHE_DIR is not None:
         env["JAX_COMPILATION_CACHE_DIR"] = str(CACHE_DIR)
     return {**env, **extra}
 
