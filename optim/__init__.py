@@ -31,6 +31,7 @@ from optim.compare import (
     standard_tuners,
 )
 from optim.hybrid import hybrid
+from optim.least_squares import levenberg_marquardt
 from optim.problems import PIDTuning, rastrigin, rosenbrock, sphere
 from optim.pso import PSOConfig, SwarmState, pso, pso_init, pso_step
 from optim.results import History, SearchHistory, SearchResult, TuneResult
@@ -53,6 +54,7 @@ __all__ = [
     "standard_tuners",
     "cmaes",
     "hybrid",
+    "levenberg_marquardt",
     "PIDTuning",
     "rastrigin",
     "rosenbrock",

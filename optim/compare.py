@@ -104,6 +104,7 @@ def standard_tuners(
 
     ``key``: PRNG key of the gradient starts, the swarm and the random points (default ``PRNGKey(0)``).
     """
+    from optim.least_squares import levenberg_marquardt
     from optim.pso import pso
     from optim.search import grid_search, random_search
     from optim.tune import grad_cost as measure_grad_cost
@@ -137,6 +138,9 @@ def standard_tuners(
             progress=progress,
         )
 
+    def least_squares(c: float) -> Any:
+        return levenberg_marquardt(problem, max_steps=max(0, int(evals // c) - 1), jac_cost=c)  # + the start
+
     def cost() -> float:
         if grad_cost == "measure":
             return measure_grad_cost(problem, n_starts=n_starts)
@@ -159,6 +163,7 @@ def standard_tuners(
             steps=hybrid_steps,
             tune_options=dict(gtol=1e-9, patience=20),
         ),
+        "lm": lambda: least_squares(cost()),
     }
     unknown = [n for n in names if n not in makers]
     if unknown:
@@ -171,6 +176,7 @@ def standard_tuners(
         "grid": evals < 1,
         "cmaes": evals < n_particles,
         "hybrid": hybrid_steps < 1,
+        "lm": evals < 1,
     }
     small = [n for n in names if too_small[n]]
     if small:

@@ -27,6 +27,7 @@ from __future__ import annotations
 import collections
 import functools
 import types
+import weakref
 from typing import Any, Callable
 
 import jax
@@ -150,12 +151,16 @@ def callable_key(fn: Any) -> Any:
     return ByIdentity(fn)
 
 
+_ALL_CACHES: "weakref.WeakSet[LRUCache]" = weakref.WeakSet()
+
+
 class LRUCache:
     """``get_or_build(key, build)`` with at most ``size`` entries (least recently used evicted)."""
 
     def __init__(self, size: int = MAX_ENTRIES) -> None:
         self.size = size
         self._data: collections.OrderedDict[Any, Any] = collections.OrderedDict()
+        _ALL_CACHES.add(self)
 
     def get_or_build(self, key: Any, build: Callable[[], Any]) -> Any:
         if key is None:
@@ -184,3 +189,10 @@ def key_or_none(*parts: Any) -> Any:
         return key
     except (Unkeyable, TypeError, RecursionError):
         return None
+
+
+def clear_all() -> None:
+    """Empty every :class:`LRUCache` (the tuners' compiled functions): with ``jax.clear_caches()``,
+    the next tuner call traces and compiles from scratch (a cold start, as in a new process)."""
+    for cache in list(_ALL_CACHES):
+        cache.clear()

@@ -15,11 +15,14 @@ Tuners: ``adam`` (:func:`optim.tune`, 1 start), ``adam_x8`` (8 vmapped starts), 
 (``optax.lbfgs`` with backtracking, skipped with its error if the current ``tune`` rejects it),
 ``pso`` (:func:`optim.pso`), ``pyswarms`` (``GlobalBestPSO`` on the jitted batched loss), ``random``
 (:func:`optim.random_search`), ``cmaes`` (:func:`optim.cmaes.cmaes`) and ``hybrid``
-(:func:`optim.hybrid.hybrid`: a short swarm, then L-BFGS).
+(:func:`optim.hybrid.hybrid`: a short swarm, then L-BFGS) and ``lm``
+(:func:`optim.least_squares.levenberg_marquardt`, on problems whose loss is a sum of squares: ``pid``;
+the others report why not).
 
 Each round runs every tuner twice, in an order rotated from round to round (interleaved):
 
-* **cold** — after ``jax.clear_caches()``, with JAX's persistent compilation cache off: the time
+* **cold** — after ``jax.clear_caches()`` and :func:`optim.compile_cache.clear_all` (the tuners'
+  own caches of compiled steps), with JAX's persistent compilation cache off: the time
   includes tracing and compilation;
 * **warm** — the same call again (same key, so the same iterates): whatever the tuner caches across
   calls is reused.
@@ -63,10 +66,11 @@ import optax
 
 import jaxsim  # noqa: F401  (float64)
 from jaxsim.problem import Problem
+from optim.compile_cache import clear_all
 from optim.results import TuneResult
 
 TARGETS = (0.01, 0.001)
-TUNERS = ("adam", "adam_x8", "lbfgs", "pso", "pyswarms", "random", "cmaes", "hybrid")
+TUNERS = ("adam", "adam_x8", "lbfgs", "lm", "pso", "pyswarms", "random", "cmaes", "hybrid")
 PROBLEMS = ("pid", "fuzzy", "trms")
 
 
@@ -163,6 +167,7 @@ def tuner_runs(b: Budget) -> dict[str, Callable[[Problem, int], TuneResult]]:
     from optim import pso, random_search, tune
     from optim.cmaes import cmaes
     from optim.hybrid import hybrid
+    from optim.least_squares import levenberg_marquardt
 
     key = jax.random.PRNGKey
     return {
@@ -183,6 +188,7 @@ def tuner_runs(b: Budget) -> dict[str, Callable[[Problem, int], TuneResult]]:
             steps=b.hybrid_steps,
             tune_options=dict(gtol=1e-9, patience=20),
         ),
+        "lm": lambda pb, s: levenberg_marquardt(pb, max_steps=b.lbfgs_steps),
     }
 
 
@@ -218,6 +224,7 @@ def one_run(run: Callable[[], TuneResult], cold: bool) -> dict[str, Any]:
     """One timed call; ``cold`` clears JAX's in-memory caches first."""
     if cold:
         jax.clear_caches()
+        clear_all()  # the tuners' own caches of compiled steps, too
     t0 = time.perf_counter()
     try:
         res = run()

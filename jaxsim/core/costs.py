@@ -7,7 +7,10 @@ A :class:`RunningCost` is an optax-like triple of pure functions (plus an option
   period ``ts`` (s);
 * ``finish(acc) -> scalar`` — the cost of the whole rollout;
 * ``rate(tick, ts) -> scalar`` — only for *additive* costs (``finish(acc) = Σ rate``): the
-  increment of one tick; a brax env's reward is ``−rate`` (:meth:`jaxsim.envs.PlantEnv.from_problem`).
+  increment of one tick; a brax env's reward is ``−rate`` (:meth:`jaxsim.envs.PlantEnv.from_problem`);
+* ``residual(tick, ts) -> (k,)`` — only for *sums of squares* (``rate = Σ residual²``: ISE, control
+  energy, saturation excess, penalties): the residuals of one tick, which let Gauss–Newton /
+  Levenberg–Marquardt work on the rollout (:meth:`jaxsim.problem.Problem.residuals`).
 
 Integrals use the rectangle rule on the ticks (``Σ integrand(t_k)·ts``), the rule of
 :mod:`jaxsim.core.metrics`, whose integrands they share: a running ITAE over ``fold`` equals
@@ -39,12 +42,14 @@ Channels = int | Sequence[int] | None
 
 class RunningCost(NamedTuple):
     """``init() -> acc``, ``update(acc, tick, ts) -> acc``, ``finish(acc) -> scalar``; ``rate(tick, ts)``
-    for additive costs (``None`` otherwise).  See the module docstring."""
+    for additive costs and ``residual(tick, ts)`` for sums of squares (``None`` otherwise).  See the
+    module docstring."""
 
     init: Callable[[], Any]
     update: Callable[[Any, Tick, jax.Array], Any]
     finish: Callable[[Any], jax.Array]
     rate: Callable[[Tick, jax.Array], jax.Array] | None = None
+    residual: Callable[[Tick, jax.Array], jax.Array] | None = None
 
 
 class Breakdown(NamedTuple):
@@ -57,7 +62,9 @@ class Breakdown(NamedTuple):
 class Objective(NamedTuple):
     """A :class:`RunningCost` whose ``finish`` returns a :class:`Breakdown` (built by :func:`combine`).
 
-    ``names``/``weights``: the terms in order and their weights in ``total``.
+    ``names``/``weights``: the terms in order and their weights in ``total``; ``residual``: the
+    weighted residuals of every term, concatenated (``None`` unless every term is a sum of squares
+    with a non-negative weight).
     """
 
     init: Callable[[], Any]
@@ -66,6 +73,7 @@ class Objective(NamedTuple):
     rate: Callable[[Tick, jax.Array], jax.Array] | None
     names: tuple[str, ...]
     weights: tuple[float, ...]
+    residual: Callable[[Tick, jax.Array], jax.Array] | None = None
 
 
 def _zero() -> jax.Array:
@@ -78,9 +86,18 @@ def _select(v: jax.Array, channels: Channels) -> jax.Array:
     return v[jnp.asarray(channels)]
 
 
-def additive(rate: Callable[[Tick, jax.Array], jax.Array]) -> RunningCost:
-    """The running cost ``Σ_k rate(tick_k, ts)`` (accumulator: one scalar)."""
-    return RunningCost(init=_zero, update=lambda acc, tick, ts: acc + rate(tick, ts), finish=lambda acc: acc, rate=rate)
+def additive(
+    rate: Callable[[Tick, jax.Array], jax.Array], residual: Callable[[Tick, jax.Array], jax.Array] | None = None
+) -> RunningCost:
+    """The running cost ``Σ_k rate(tick_k, ts)`` (accumulator: one scalar); ``residual`` (optional)
+    with ``rate = Σ residual²`` marks it a sum of squares."""
+    return RunningCost(
+        init=_zero,
+        update=lambda acc, tick, ts: acc + rate(tick, ts),
+        finish=lambda acc: acc,
+        rate=rate,
+        residual=residual,
+    )
 
 
 def _error(tick: Tick, channels: Channels) -> jax.Array:
@@ -94,7 +111,10 @@ def iae(channels: Channels = None) -> RunningCost:
 
 def ise(channels: Channels = None) -> RunningCost:
     """``∫ Σ(r − y)² dt`` (error units² × s)."""
-    return additive(lambda tick, ts: jnp.sum(metrics.ise_integrand(_error(tick, channels))) * ts)
+    return additive(
+        lambda tick, ts: jnp.sum(metrics.ise_integrand(_error(tick, channels))) * ts,
+        lambda tick, ts: jnp.ravel(_error(tick, channels)) * jnp.sqrt(ts),
+    )
 
 
 def itae(channels: Channels = None, clock: Callable[[jax.Array], jax.Array] | None = None) -> RunningCost:
@@ -108,19 +128,26 @@ def itae(channels: Channels = None, clock: Callable[[jax.Array], jax.Array] | No
 
 def control_energy(offset: Any = 0.0, channels: Channels = None) -> RunningCost:
     """``∫ Σ(u − offset)² dt`` on the commanded input (input units² × s; ``offset`` e.g. a trim input)."""
-    return additive(lambda tick, ts: jnp.sum(metrics.energy_integrand(_select(tick.u, channels), offset)) * ts)
+    return additive(
+        lambda tick, ts: jnp.sum(metrics.energy_integrand(_select(tick.u, channels), offset)) * ts,
+        lambda tick, ts: jnp.ravel(_select(tick.u, channels) - offset) * jnp.sqrt(ts),
+    )
 
 
 def saturation_excess(u_max: Any, channels: Channels = None) -> RunningCost:
     """``∫ Σ max(0, |u| − u_max)² dt`` on the commanded input (input units² × s)."""
     return additive(
-        lambda tick, ts: jnp.sum(metrics.saturation_excess_integrand(_select(tick.u, channels), u_max)) * ts
+        lambda tick, ts: jnp.sum(metrics.saturation_excess_integrand(_select(tick.u, channels), u_max)) * ts,
+        lambda tick, ts: jnp.ravel(jnp.maximum(jnp.abs(_select(tick.u, channels)) - u_max, 0.0)) * jnp.sqrt(ts),
     )
 
 
 def penalty(g: Callable[[Tick], jax.Array], weight: float = 1.0) -> RunningCost:
     """``weight·∫ Σ max(0, g(tick))² dt``: a soft path constraint ``g ≤ 0`` (e.g. ``|y| − y_max``)."""
-    return additive(lambda tick, ts: weight * jnp.sum(jnp.maximum(jnp.asarray(g(tick)), 0.0) ** 2) * ts)
+    return additive(
+        lambda tick, ts: weight * jnp.sum(jnp.maximum(jnp.asarray(g(tick)), 0.0) ** 2) * ts,
+        lambda tick, ts: jnp.ravel(jnp.maximum(jnp.asarray(g(tick)), 0.0)) * jnp.sqrt(weight * ts),
+    )
 
 
 def terminal(fn: Callable[[Tick], jax.Array]) -> RunningCost:
@@ -246,7 +273,13 @@ def combine(**terms: Any) -> Objective:
         def rate(tick, ts):
             return sum(w * c.rate(tick, ts) for w, c in zip(weights, costs))
 
-    return Objective(init, update, finish, rate, names, weights)
+    residual = None
+    if all(c.residual is not None for c in costs) and all(w >= 0 for w in weights):
+
+        def residual(tick, ts):
+            return jnp.concatenate([jnp.sqrt(w) * jnp.ravel(c.residual(tick, ts)) for w, c in zip(weights, costs)])
+
+    return Objective(init, update, finish, rate, names, weights, residual)
 
 
 def accumulate(cost: RunningCost | Objective, ticks: Tick, ts: Any) -> Any:

@@ -44,7 +44,7 @@ import numpy as np
 
 from jaxsim.core.costs import Breakdown, Objective, rollout_cost
 from jaxsim.core.integrators import RK4, Solver
-from jaxsim.core.rollout import ClosedLoop, Timing, Trajectory, simulate
+from jaxsim.core.rollout import ClosedLoop, Tick, Timing, Trajectory, simulate
 from jaxsim.montecarlo.distributions import draw as draw_space
 from jaxsim.montecarlo.distributions import is_distribution, validate_space
 from jaxsim.problem.reducers import mean
@@ -202,6 +202,46 @@ class Problem:
         if not self.scenarios:
             return self.evaluate(params).total
         return self.reduce(self.scenario_totals(params))
+
+    @property
+    def least_squares(self) -> bool:
+        """Whether :meth:`residuals` exists: a rollout objective whose every term is a sum of squares
+        (:mod:`jaxsim.core.costs`: ``ise``, ``control_energy``, ``saturation_excess``, ``penalty``),
+        averaged over the scenarios (``reduce`` = :func:`~jaxsim.problem.reducers.mean`)."""
+        return self.objective is not None and self.objective.residual is not None and self.reduce is mean
+
+    def residuals(self, params: Any) -> jax.Array:
+        """The loss as a sum of squares, ``loss(params) = Σ residuals(params)²`` (to rounding): the
+        objective's per-tick residuals of every scenario, flattened to ``(S·N·k,)`` and scaled by
+        ``1/√S`` — what Gauss–Newton / :func:`optim.least_squares.levenberg_marquardt` need.
+
+        Raises ``ValueError`` unless :attr:`least_squares` (an ITAE or IAE term, a ``loss_fn``, or a
+        reduce other than the mean has no residual form)."""
+        if not self.least_squares:
+            why = (
+                "it was made with from_loss"
+                if self.objective is None
+                else "its reduce is not the mean"
+                if self.objective.residual is not None
+                else f"a term of {', '.join(self.objective.names)} is not a sum of squares (ITAE/IAE are not)"
+            )
+            raise ValueError(f"problem {self.name!r}: no residual form of the loss ({why})")
+
+        def one(draw: dict[str, Any] | None, key: jax.Array | None) -> jax.Array:
+            sc = self.scenario(params, draw)
+            k = key if key is not None else (sc.key if sc.key is not None else self.key)
+            timing = dataclasses.replace(sc.timing, save_every=1)
+            tr = simulate(sc.loop, sc.x0, timing, k, sc.solver)
+            ts = jnp.asarray(timing.ts, tr.t.dtype)
+            ticks = Tick(*tr[: len(Tick._fields)])
+            return jnp.ravel(jax.vmap(lambda tick: self.objective.residual(tick, ts))(ticks))
+
+        if not self.scenarios:
+            return one(None, None)
+        draws = dict(self.scenarios)
+        keys = draws.pop("key", None)
+        per = jax.vmap(one)(draws, keys) if keys is not None else jax.vmap(lambda d: one(d, None))(draws)
+        return jnp.ravel(per) / jnp.sqrt(per.shape[0])
 
     def violation(self, params: Any) -> jax.Array:
         """``g(params)`` flattened (``(0,)`` without constraints)."""
