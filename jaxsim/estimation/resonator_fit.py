@@ -9,8 +9,9 @@ Two residuals:
 * ``complex``: ``(H(θ) − H_meas)/|H_meas|`` (real and imaginary parts) — an H1 estimate with phase;
 * ``magnitude``: ``log|H(θ)| − log|A_meas|`` — amplitude tables (``g`` then only up to its sign).
 
-Fixed ``n_iter`` damped Gauss–Newton steps with the usual accept/reject rule on ``λ``; pure JAX, so
-it runs under ``jit`` and ``vmap`` (one fit per Monte-Carlo record).
+At most ``n_iter`` Levenberg–Marquardt trials (:func:`jaxsim.core.least_squares.levenberg_marquardt_solve`,
+stopping early at convergence); pure JAX, so it runs under ``jit`` and ``vmap`` (one fit per
+Monte-Carlo record).
 """
 
 from __future__ import annotations
@@ -19,6 +20,8 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+
+from jaxsim.core.least_squares import levenberg_marquardt_solve
 
 
 class ResonatorFit(NamedTuple):
@@ -84,23 +87,7 @@ def fit_resonator(
     def res(t: jax.Array) -> jax.Array:
         return _residual(t, f, h, mode, hold)
 
-    def cost(t: jax.Array) -> jax.Array:
-        r = res(t)
-        return 0.5 * jnp.sum(r * r)
-
-    def body(_: int, carry: tuple[jax.Array, jax.Array, jax.Array]) -> tuple[jax.Array, jax.Array, jax.Array]:
-        t, lam, c = carry
-        j = jax.jacfwd(res)(t)
-        jtj = j.T @ j
-        step = jnp.linalg.solve(jtj + lam * jnp.diag(jnp.diag(jtj) + 1e-12), -j.T @ res(t))
-        c_new = cost(t + step)
-        better = jnp.isfinite(c_new) & (c_new < c)
-        return (
-            jnp.where(better, t + step, t),
-            jnp.where(better, lam / 3.0, lam * 3.0),
-            jnp.where(better, c_new, c),
-        )
-
-    theta, _, c = jax.lax.fori_loop(0, int(n_iter), body, (theta0, jnp.asarray(lam0, float), cost(theta0)))
+    state = levenberg_marquardt_solve(res, theta0, max_steps=int(n_iter), damping=lam0)
+    theta, c = state.u, 0.5 * state.cost
     q = jnp.exp(theta[2])
     return ResonatorFit(theta, theta[1], q, peak_frequency(theta[1], q), c)

@@ -188,3 +188,17 @@ def test_objective_residual_squares_to_the_rate():
     assert float(r @ r) == pytest.approx(float(obj.rate(tick, ts)), rel=1e-14)
     assert costs.combine(a=costs.ise(), b=costs.itae()).residual is None
     assert costs.combine(a=(-1.0, costs.ise())).residual is None
+
+
+def test_the_pure_kernel_vmaps_like_a_loop():
+    """jaxsim.core's kernel under vmap (lanes stop at different steps) equals one run per start."""
+    from jaxsim.core.least_squares import levenberg_marquardt_solve
+
+    starts = jnp.array([[-1.2, 1.0], [2.0, 2.0], [0.0, -1.0]])
+    solve = jax.jit(lambda u: levenberg_marquardt_solve(rosenbrock, u, max_steps=50))
+    batched = jax.vmap(solve)(starts)
+    for i, u in enumerate(starts):
+        one = solve(u)
+        np.testing.assert_allclose(batched.u[i], one.u, rtol=1e-12, atol=1e-14)
+        assert int(batched.step[i]) == int(one.step) and int(batched.status[i]) == int(one.status)
+    assert len(set(np.asarray(batched.step).tolist())) > 1  # the lanes did stop at different steps
