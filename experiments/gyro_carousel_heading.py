@@ -152,7 +152,7 @@ def table_monte_carlo(cfg: Config, progress: Callable[..., Any]) -> stages.Stage
             f'column headed "0,033": at N = 0.033 as printed our RMS is ≥ '
             f"{metrics['header_as_printed_rms_over_paper_min']:.1f}× the paper's model values in every row "
             f"(errors of tens of degrees up to a near-uniform heading); the N that fits the column is "
-            f"{metrics['header_column_best_N']:.4f} °/s/√Hz — the header is a typo for 0.0033, the real gyro's noise"
+            f"{metrics['header_column_best_N']:.5f} °/s/√Hz — the header is a typo for 0.0033, the real gyro's noise"
         )
     return stages.Stage(
         metrics=metrics, tables={"table1": rows}, figures={"table1": _plot_table(cfg, rows)}, notes=notes
