@@ -6,12 +6,27 @@ gyro-carousel least squares, attitude update algorithms.
 * :mod:`jaxsim.inertial.allan_fit` — the five-term Allan-variance model and its fits (weighted least
   squares, gradient in log space with a Hessian covariance);
 * :mod:`jaxsim.inertial.carousel` — heading from a continuously rotated gyro by batch least squares,
-  and its differentiable error budget (white noise, bias random walk, turntable-rate error).
+  and its differentiable error budget (white noise, bias random walk, turntable-rate error);
+* :mod:`jaxsim.inertial.attitude` — quaternion attitude updates from gyro increments (first order,
+  two- and three-sample coning corrections), classical coning motion and its closed-form drift.
 
 The Allan-variance estimator itself is :mod:`jaxsim.estimation.allan`.
 """
 
 from jaxsim.inertial.allan_fit import AllanFit, avar_dof, avar_model, design_matrix, fit_gradient, fit_wls
+from jaxsim.inertial.attitude import (
+    ALGORITHMS,
+    coning_attitude,
+    coning_drift_rate,
+    coning_increments,
+    coning_rate,
+    drift_rate,
+    propagate,
+    quat_exp,
+    quat_mul,
+    quat_rotation_vector,
+    rotation_vectors,
+)
 from jaxsim.inertial.carousel import (
     EARTH_RATE,
     HeadingBudget,
@@ -25,7 +40,18 @@ from jaxsim.inertial.carousel import (
 from jaxsim.inertial.sensor_errors import GyroNoise, flicker_noise, gyro_noise, noise_terms, wiener_sequence
 
 __all__ = [
+    "ALGORITHMS",
     "EARTH_RATE",
+    "coning_attitude",
+    "coning_drift_rate",
+    "coning_increments",
+    "coning_rate",
+    "drift_rate",
+    "propagate",
+    "quat_exp",
+    "quat_mul",
+    "quat_rotation_vector",
+    "rotation_vectors",
     "AllanFit",
     "HeadingBudget",
     "HeadingEstimate",
