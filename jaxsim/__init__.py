@@ -6,6 +6,9 @@ Sub-packages:
   linearisation, transfer functions;
 * :mod:`jaxsim.plants` — one module per plant family of the seed papers;
 * :mod:`jaxsim.control` — controllers (PID, ...) and their design rules;
+* :mod:`jaxsim.estimation` — Kalman filters and smoothers, banks, particle filters, observers,
+  Allan variance;
+* :mod:`jaxsim.inertial` — inertial-sensor error models, attitude updates, gyro heading and Allan fits;
 * :mod:`jaxsim.montecarlo` — Monte Carlo and parameter sweeps: reproducible streaming statistics,
   sharded over devices and hosts, resumable;
 * :mod:`jaxsim.problem` — a tuning or robustness question as one object (parameter space,

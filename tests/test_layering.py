@@ -2,9 +2,10 @@
 every module, parsed with ``ast`` (nothing is imported), including imports inside functions.
 
     jaxsim.core                                   imports nothing above it
-    jaxsim.plants | jaxsim.control | jaxsim.estimation
+    jaxsim.plants | jaxsim.control | jaxsim.estimation | jaxsim.inertial
                                                   plants import neither estimation nor control;
-                                                  estimation does not import plants
+                                                  estimation does not import plants; inertial
+                                                  (sensor models) neither plants nor control
     jaxsim.problem                                core, plants, control, estimation and
                                                   montecarlo.distributions only
     optim, jaxsim.montecarlo, jaxsim.envs         never import experiments
@@ -24,6 +25,7 @@ ABOVE_CORE = (
     "jaxsim.plants",
     "jaxsim.control",
     "jaxsim.estimation",
+    "jaxsim.inertial",
     "jaxsim.problem",
     "jaxsim.montecarlo",
     "jaxsim.envs",
@@ -39,6 +41,7 @@ RULES: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("jaxsim.core", ABOVE_CORE),
     ("jaxsim.plants", ("jaxsim.estimation", "jaxsim.control")),
     ("jaxsim.estimation", ("jaxsim.plants",)),
+    ("jaxsim.inertial", ("jaxsim.plants", "jaxsim.control", "jaxsim.problem", "jaxsim.montecarlo")),
     ("jaxsim.problem", ("jaxsim.envs", "jaxsim.mjx", "jaxsim.montecarlo", "optim", "experiments")),
 )
 # imports a rule's forbidden prefix would catch but the layers allow: (package, allowed prefix)
