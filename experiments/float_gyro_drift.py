@@ -4,11 +4,11 @@ Bayesian bank of Kalman filters, an EKF with the augmented state, and gradient m
 
 The drift ``ε₀ + ε̃`` (:mod:`jaxsim.inertial.float_gyro`) with true ``α = 0.00055 s⁻¹``, ``β = −0.001`` is
 sampled under an assumed warm-up ``T(t) = ΔT(1 − e^{−t/τ})``.  Each record is identified three ways:
-the posterior mean over an (α, β) grid from a vmapped bank of Kalman filters
-(:func:`jaxsim.estimation.mmae.bank_filter` for the time history of one run, the total log-likelihoods for the
-Monte Carlo), the final estimate of the EKF whose state carries α and β, and damped-Newton maximum
-likelihood on the Kalman log-likelihood (``jax.grad``/``jax.hessian``).  One run reproduces the layout of
-the paper's Table 1; the Monte Carlo (vmapped over noise draws) gives each method's mean relative error
+the posterior mean over an (α, β) grid from a vmapped bank of Kalman filters (posterior after every step
+by :func:`jaxsim.estimation.mmae.bank_posterior`), the final estimate of the EKF whose state carries α and
+β, and damped-Newton maximum likelihood on the Kalman log-likelihood (``jax.grad`` through the filter).
+The first draw reproduces the layout of the paper's Table 1; the Monte Carlo (``lax.map`` over batches of
+vmapped noise draws, one compilation) gives each method's mean relative error
 with a 95 % interval, and the NEES of the Kalman filter (true parameters) and of the EKF against χ² bounds.
 """
 

@@ -21,7 +21,7 @@ Identifications of ``θ = (α, β)``:
   whose total log-likelihoods give the grid posterior (:func:`grid_posterior_mean`);
 * :func:`augmented_ekf_model` — the EKF with the state augmented by ``α`` and ``β`` (random constants);
 * :func:`ml_estimate` — maximum likelihood by damped Newton steps on the exact Kalman log-likelihood
-  (``jax.grad`` / ``jax.hessian`` through the scanned filter).
+  (``jax.grad`` through the scanned filter; the Hessian by central differences of that gradient).
 """
 
 from __future__ import annotations
@@ -186,30 +186,30 @@ def ml_estimate(
     def ll(theta):
         return log_likelihood(jnp.exp(theta[0]), theta[1] * BETA_SCALE, y, u, **model_kw)
 
-    grads = jax.vmap(jax.grad(ll))
+    value_grads = jax.vmap(jax.value_and_grad(ll))
     offsets = jnp.concatenate([jnp.zeros((1, 2)), fd_step * jnp.eye(2), -fd_step * jnp.eye(2)])
 
-    def grad_hess(theta):
-        g = grads(theta + offsets)
+    def body(i, carry):
+        # the filter's gradient is traced once: the last pass (i = iterations) only evaluates at the final θ
+        theta = carry[0]
+        v, g = value_grads(theta + offsets)
         hm = (g[1:3] - g[3:5]).T / (2 * fd_step)
-        return g[0], 0.5 * (hm + hm.T)
-
-    def newton(_, theta):
-        g, hm = grad_hess(theta)
-        lam, v = jnp.linalg.eigh(-hm)
+        hm = 0.5 * (hm + hm.T)
+        lam, vec = jnp.linalg.eigh(-hm)
         lam = jnp.maximum(lam, 1e-3 * jnp.max(jnp.abs(lam)) + 1e-12)
-        step = v @ ((v.T @ g) / lam)
-        return theta + step * jnp.minimum(1.0, max_step / (jnp.linalg.norm(step) + 1e-300))
+        step = vec @ ((vec.T @ g[0]) / lam)
+        step = step * jnp.minimum(1.0, max_step / (jnp.linalg.norm(step) + 1e-300))
+        return jnp.where(i < iterations, theta + step, theta), v[0], g[0], hm
 
     theta0 = jnp.stack([jnp.log(jnp.asarray(alpha0, float)), jnp.asarray(beta0, float) / BETA_SCALE])
-    theta = jax.lax.fori_loop(0, iterations, newton, theta0)
-    g, hm = grad_hess(theta)
+    init = (theta0, jnp.zeros(()), jnp.zeros(2), jnp.zeros((2, 2)))
+    theta, value, g, hm = jax.lax.fori_loop(0, iterations + 1, body, init)
     cov = jnp.linalg.inv(-hm)
     alpha = jnp.exp(theta[0])
     return MLEstimate(
         alpha,
         theta[1] * BETA_SCALE,
-        ll(theta),
+        value,
         g,
         jnp.linalg.norm(g),
         alpha * jnp.sqrt(jnp.abs(cov[0, 0])),
