@@ -8,8 +8,9 @@ plus a constant).  The design model is the augmented ``z = [x; w]`` (order ``n +
 ``u = −K x̂ − ĉ_w ŵ`` (state feedback + disturbance cancellation); ``K`` places ``eig(A − BK)`` on a
 Butterworth pattern of radius ``ω_c``; the observer ``ż̂ = A_a ẑ + B_a u + L (y − C_a ẑ)`` has
 Butterworth poles of radius ``ratio·ω_c`` (the paper: an order of magnitude faster, ratio 10),
-``L`` from the dual system.  Gains by Ackermann's formula in a scaled time (:func:`scaled_acker`; a few ``jnp`` matrix products,
-quick to compile and differentiable; ``jaxsim.lti.placement.place`` and SciPy are the oracles in the tests).
+``L`` from the dual system.  Gains by Ackermann's formula in a scaled time (:func:`scaled_acker`; a few
+``jnp`` matrix products, quick to compile and differentiable; SciPy's ``place_poles`` is the oracle in
+the tests).
 """
 
 from __future__ import annotations

@@ -119,8 +119,9 @@ def simulate_pid(
     sigma: Any = 0.0,
 ) -> Run:
     """Plant + integrator from rest (the angle measured as ``θ2 + v``, :func:`sensor_noise`);
-    ``u = −(kp·θ2 + ki·∫θ2 dt + kd·ω1)``: P and I on the unit's angle, the damping term on the motor speed ``ω1`` (a tachometer; with the derivative of the unit's own angle the
-    undamped, non-collocated resonance is unstable for every gain set)."""
+    ``u = −(kp·θ2 + ki·∫θ2 dt + kd·ω1)``: P and I on the unit's angle, the damping term on the motor speed
+    ``ω1`` (a tachometer; with the derivative of the unit's own angle the undamped, non-collocated
+    resonance is unstable for every gain set)."""
 
     def u_of(x, v):
         return -(gains["kp"] * (x[0] + v) + gains["ki"] * x[4] + gains["kd"] * x[3])
