@@ -76,10 +76,13 @@ def smooth_dead_zone(z: jax.Array, half_width: jax.Array, eps: jax.Array) -> jax
 
 
 def shaft_torque(p: StabiliserParams, twist: jax.Array, eps: jax.Array | None = None) -> jax.Array:
-    """``M_e = c·DZ(δ)`` N·m; exact dead zone when ``eps`` is ``None``, else the smooth one (``eps`` rad)."""
+    """``M_e = c·DZ(δ)`` N·m; exact dead zone when ``eps`` is ``None`` or ``0`` (a traced ``eps`` selects at
+    run time, so one compiled loop serves both), else the smooth one (``eps`` rad)."""
     h = 0.5 * p.backlash
-    dz = dead_zone(twist, h) if eps is None else smooth_dead_zone(twist, h, eps)
-    return p.stiffness * dz
+    if eps is None:
+        return p.stiffness * dead_zone(twist, h)
+    smooth = smooth_dead_zone(twist, h, jnp.maximum(eps, 1e-12))
+    return p.stiffness * jnp.where(eps > 0, smooth, dead_zone(twist, h))
 
 
 def dynamics(p: StabiliserParams, x: jax.Array, u: jax.Array, d: jax.Array, eps: jax.Array | None = None) -> jax.Array:
