@@ -21,6 +21,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxsim.core.validation import is_concrete
+
 
 def butterworth_poles(n: int, radius: Any) -> jax.Array:
     """The ``n`` left-half-plane poles ``radius·exp(j(π/2 + (2k − 1)π/(2n)))``, ``k = 1..n`` (complex ``(n,)``;
@@ -55,17 +57,21 @@ class ModalDesign(NamedTuple):
     Cw: jax.Array
 
 
-def augmented(A: Any, B: Any, C: Any, omega: Any) -> tuple[jax.Array, jax.Array, jax.Array, jax.Array]:  # noqa: N803
+def augmented(A: Any, B: Any, C: Any, omega: Any) -> tuple[Any, Any, Any, Any]:  # noqa: N803
     """``(A_a, B_a, C_a, C_w)`` of ``z = [x; w]``: ``A_a = [[A, B C_w], [0, A_w]]``, ``B_a = [B; 0]``,
-    ``C_a = [C, 0]``."""
-    a, b, c = (jnp.atleast_2d(jnp.asarray(m, dtype=float)) for m in (A, B, C))
+    ``C_a = [C, 0]`` (NumPy arrays when every input is concrete, so designs inside a traced loss keep
+    the model constant)."""
+    xp = np if is_concrete((A, B, C, omega)) else jnp
+    a, b, c = (xp.atleast_2d(xp.asarray(m, dtype=float)) for m in (A, B, C))
     n = a.shape[0]
     if b.shape != (n, 1) or c.shape != (1, n):
         raise ValueError(f"B, C: expected shapes ({n}, 1) and (1, {n}), got {b.shape} and {c.shape}")
-    aw, cw = internal_model(omega)
-    aa = jnp.block([[a, b @ cw], [jnp.zeros((3, n)), aw]])
-    ba = jnp.concatenate([b, jnp.zeros((3, 1))])
-    ca = jnp.concatenate([c, jnp.zeros((1, 3))], axis=1)
+    w2 = xp.asarray(omega, dtype=float) ** 2
+    aw = xp.array([[0.0, 1.0, 0.0], [-w2, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    cw = xp.array([[1.0, 0.0, 1.0]])
+    aa = xp.block([[a, b @ cw], [xp.zeros((3, n)), aw]])
+    ba = xp.concatenate([b, xp.zeros((3, 1))])
+    ca = xp.concatenate([c, xp.zeros((1, 3))], axis=1)
     return aa, ba, ca, cw
 
 
@@ -86,19 +92,31 @@ def scaled_acker(A: Any, B: Any, coeffs: Any, scale: Any) -> jax.Array:  # noqa:
     ``eig(A − BK)`` are ``scale`` × the roots of ``coeffs`` (monic, highest power first, length ``n + 1``).
     The scaled roots are ``O(1)``, which keeps ``φ`` and the controllability matrix far better conditioned
     than at the raw scale; real arithmetic only (quick to compile, differentiable)."""
-    a = jnp.asarray(A) / scale
-    b = jnp.asarray(B)
-    n = a.shape[0]
+    n = jnp.shape(A)[0]
     if len(coeffs) != n + 1:
         raise ValueError(f"coeffs: expected {n + 1} coefficients, got {len(coeffs)}")
+    if is_concrete((A, B)):
+        # 𝒞(A/s) = 𝒞(A)·diag(s⁻ᵏ), so eₙᵀ𝒞(A/s)⁻¹ = (s/s₀)ⁿ⁻¹·eₙᵀ𝒞(A/s₀)⁻¹: one NumPy solve at a
+        # well-conditioned reference scale s₀ = ‖A‖₂, no linear solve in the traced (tuned) graph
+        a0, b0 = np.asarray(A, dtype=float), np.asarray(B, dtype=float)
+        s0 = max(float(np.linalg.norm(a0, 2)), 1e-12)
+        q0 = np.linalg.solve(_ctrb(a0 / s0, b0, np).T, np.eye(n)[-1])
+        q = (scale / s0) ** (n - 1) * jnp.asarray(q0)
+    else:
+        q = jnp.linalg.solve(_ctrb(jnp.asarray(A) / scale, jnp.asarray(B), jnp).T, jnp.eye(n)[-1])  # eₙᵀ 𝒞⁻¹
+    a = jnp.asarray(A) / scale
     phi = jnp.eye(n)
     for c in coeffs[1:]:  # Horner: φ(a) = aⁿ + c1 aⁿ⁻¹ + … + cn I
         phi = phi @ a + c * jnp.eye(n)
-    cols = [b[:, 0]]
-    for _ in range(n - 1):
-        cols.append(a @ cols[-1])
-    q = jnp.linalg.solve(jnp.stack(cols, axis=1).T, jnp.eye(n)[-1])  # eₙᵀ 𝒞⁻¹
     return scale * (q @ phi)[None, :]
+
+
+def _ctrb(a: Any, b: Any, xp: Any) -> Any:
+    """Controllability matrix ``[b, a b, …, aⁿ⁻¹ b]`` (single input) with the array module ``xp``."""
+    cols = [b[:, 0]]
+    for _ in range(a.shape[0] - 1):
+        cols.append(a @ cols[-1])
+    return xp.stack(cols, axis=1)
 
 
 def modal_design(A: Any, B: Any, C: Any, omega: Any, radius: Any, observer_ratio: Any = 10.0) -> ModalDesign:  # noqa: N803
@@ -106,7 +124,7 @@ def modal_design(A: Any, B: Any, C: Any, omega: Any, radius: Any, observer_ratio
     order ``n + 3``, radius ``observer_ratio·radius``; internal model at ``omega`` rad/s."""
     aa, ba, ca, cw = augmented(A, B, C, omega)
     n = jnp.asarray(A).shape[0]
-    k = scaled_acker(jnp.asarray(A, dtype=float), jnp.asarray(B, dtype=float), butterworth_coefficients(n), radius)
+    k = scaled_acker(A, B, butterworth_coefficients(n), radius)
     lt = scaled_acker(aa.T, ca.T, butterworth_coefficients(n + 3), observer_ratio * radius)
     return ModalDesign(k, lt.T, aa, ba, ca, cw)
 

@@ -40,6 +40,16 @@ def test_gains_match_scipy_place_poles_and_the_separation_principle(design):
         assert np.min(np.abs(got - p)) < 1e-6 * abs(p)
 
 
+def test_concrete_model_path_equals_the_traced_path(design):
+    # a concrete model (A, B, C, Ω) takes the NumPy reference-scale path; jit traces them all
+    def f(r):
+        return mo.modal_design(A, B, C, OM, r, 10.0)
+
+    concrete = jax.jit(f)(W0)
+    assert np.asarray(concrete.K) == pytest.approx(np.asarray(design.K), rel=1e-9)
+    assert np.asarray(concrete.L) == pytest.approx(np.asarray(design.L), rel=1e-7)
+
+
 def test_gain_gradient_matches_finite_differences():
     def f(r):
         d = mo.modal_design(A, B, C, OM, r * W0, 10.0)
