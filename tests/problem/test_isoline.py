@@ -72,5 +72,5 @@ def test_outcome_flags_a_collision():
     poses = jnp.stack([jnp.linspace(1.0, 3.0, 50), jnp.zeros(50), jnp.zeros(50)], axis=1)
     modes = jnp.zeros(49, int)
     tracking = jnp.ones(49, bool)
-    out = iso.outcome(poses, modes, tracking, discs)
+    out = jax.jit(iso.outcome)(poses, modes, tracking, discs)
     assert bool(out.collided) and float(out.min_distance) == pytest.approx(-0.4, abs=0.03) and not bool(out.success)
