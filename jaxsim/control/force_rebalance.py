@@ -110,7 +110,9 @@ def simulate(
         s = jnp.where(tick, s_new, s)
         e_prev = jnp.where(tick, e, e_prev)
         i_held = jnp.where(tick, i_new, i_held)
-        x_next = jax.lax.fori_loop(0, substeps, lambda _, y: qa.rk4_step(p, y, i_held, a, h), x)
+        x_next = x
+        for _ in range(substeps):  # static and small: unrolled (cheaper to compile under grad)
+            x_next = qa.rk4_step(p, x_next, i_held, a, h)
         return (x_next, s, e_prev, i_held, k + 1), (x[0], i_held)
 
     z = jnp.zeros(())

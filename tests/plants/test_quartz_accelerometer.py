@@ -45,8 +45,13 @@ def test_rk4_against_solve_ivp_linear_range():
         xs.append(np.asarray(x))
     A, bi, ba, _ = (np.asarray(v) for v in qa.linear_model(p))
     sol = scipy.integrate.solve_ivp(
-        lambda t, y: A @ y + bi[:, 0] * i + ba[:, 0] * a, (0, n * h), np.zeros(2), rtol=1e-11, atol=1e-15,
-        t_eval=h * np.arange(1, n + 1), method="DOP853",
+        lambda t, y: A @ y + bi[:, 0] * i + ba[:, 0] * a,
+        (0, n * h),
+        np.zeros(2),
+        rtol=1e-11,
+        atol=1e-15,
+        t_eval=h * np.arange(1, n + 1),
+        method="DOP853",
     )
     np.testing.assert_allclose(np.array(xs)[:, 0], sol.y[0], atol=1e-6 * np.abs(sol.y[0]).max())
 
