@@ -1,5 +1,6 @@
 """Study ``quartz_accelerometer`` (seed 004 B6) through the CLI, tiny preset: config and files, the
-claims' verdicts, the designs' bandwidths against a NumPy resolvent of the ZOH loop's linear model, the Monte-Carlo intervals around the linear noise prediction."""
+claims' verdicts, the designs' bandwidths against a NumPy resolvent of the ZOH loop's linear model,
+the Monte-Carlo intervals around the linear noise prediction."""
 
 import dataclasses
 
