@@ -40,7 +40,7 @@ from jaxsim.plants import helicopter_3dof as heli
 from jaxsim.problem import Param, ParamSpace, Problem
 
 GAIN_NAMES = ("g1_pitch", "g1_elev", "g2_pitch", "g2_elev")
-# XLA options of the full-plant programs: the Lagrangian's nested derivatives compile ~3× faster at the
+# XLA options of the study's own programs: the Lagrangian's nested derivatives compile ~3× faster at the
 # lowest backend optimisation level and run ~2.5× slower (seconds either way); results are unchanged
 LOW_OPT = {"xla_backend_optimization_level": 0, "xla_llvm_disable_expensive_passes": True}
 
@@ -249,7 +249,7 @@ def lyapunov_check(cfg: Config) -> dict[str, float]:
         x1 = RK4.step(lambda tt, xx: sg.reduced_dynamics(g, a1, b, xx, tt), t, x, jnp.asarray(cfg.lyap_dt))
         return x1, x1
 
-    _, xs = jax.jit(lambda x: jax.lax.scan(body, x, cfg.lyap_dt * jnp.arange(n)))(x0)
+    _, xs = compile_low(lambda x: jax.lax.scan(body, x, cfg.lyap_dt * jnp.arange(n)), x0)
     xs = jnp.concatenate([x0[None], xs])
     lyap = np.asarray(sg.lyapunov(g, a1, b, xs))
     v = np.asarray(sg.energy(xs[:, :2], xs[:, 2:4], a0) - v_star)
@@ -322,15 +322,22 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         jnp.array([1.0] * nd + [0.0, 0.0]),
         jnp.concatenate([z_cl, z_e]),
     )
-    signals = jax.vmap(lambda g, z: loop_signals(cfg, g, z))
-    energies, sig = compile_low(lambda zs: (jax.vmap(mechanical_energy)(zs[nd:]), signals(stacked, zs[:nd])), zs_all)
-    energies = np.asarray(energies)
-    kin0 = float(heli.energies(heli.HelicopterParams())[0](z_e[0, :3], z_e[0, 3:6]))
+    p_nom = heli.HelicopterParams()
+
+    def post(zs):
+        w, err = jax.vmap(lambda g, z: loop_signals(cfg, g, z))(stacked, zs[:nd])
+        volts = jax.vmap(jax.vmap(lambda z, ww: voltages(cfg, p_nom, z, ww)))(zs[:nd], w)
+        kin0 = heli.energies(p_nom)[0](zs[nd, 0, :3], zs[nd, 0, 3:6])
+        return jax.vmap(mechanical_energy)(zs[nd:]), w, err, volts, kin0
+
+    energies, w_all, err_all, volts_all, kin0 = (np.asarray(v) for v in compile_low(post, zs_all))
+    kin0 = float(kin0)
     inv = invariant_stage(cfg, energies[0], energies[1], kin0)
     # one compiled reduced-model batch: the designs at the nominal draw + hand and gradient over the MC draws
     draws = problem.sample(jax.random.PRNGKey(cfg.seed + 1), cfg.mc_runs)
     n_mc = cfg.mc_runs
-    batch = jax.jit(jax.vmap(lambda g, d, k: loss_terms(cfg, g, d, k)))(
+    batch = compile_low(
+        jax.vmap(lambda g, d, k: loss_terms(cfg, g, d, k)),
         jnp.concatenate([stacked, jnp.tile(designs["hand"], (n_mc, 1)), jnp.tile(designs["gradient"], (n_mc, 1))]),
         jnp.concatenate([jnp.full(nd, 0.2), draws["damping"], draws["damping"]]),
         jnp.concatenate([jnp.full(nd, 0.5), draws["kf"], draws["kf"]]),
@@ -347,11 +354,11 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     lines_v, lines_amp, rows = {}, {}, []
     for i_d, (name, gains) in enumerate(designs.items()):
         zs = np.asarray(zs_all[i_d])
-        w, err = (np.asarray(v[i_d]) for v in sig)
+        err = err_all[i_d]
         rel = np.sqrt(np.mean(err[-n_tail:] ** 2, axis=0)) / np.asarray(v_star)
         amp_p = np.degrees(np.max(np.abs(zs[-n_tail:, 2])))
         amp_e = np.degrees(np.max(np.abs(zs[-n_tail:, 1])))
-        volts = np.asarray(jax.vmap(lambda z, ww: voltages(cfg, heli.HelicopterParams(), z, ww))(zs, w))
+        volts = volts_all[i_d]
         row = {
             "design": name,
             **{n: float(gains[i]) for i, n in enumerate(GAIN_NAMES)},
