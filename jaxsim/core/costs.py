@@ -143,11 +143,15 @@ def saturation_excess(u_max: Any, channels: Channels = None) -> RunningCost:
 
 
 def penalty(g: Callable[[Tick], jax.Array], weight: float = 1.0) -> RunningCost:
-    """``weight·∫ Σ max(0, g(tick))² dt``: a soft path constraint ``g ≤ 0`` (e.g. ``|y| − y_max``)."""
-    return additive(
-        lambda tick, ts: weight * jnp.sum(jnp.maximum(jnp.asarray(g(tick)), 0.0) ** 2) * ts,
-        lambda tick, ts: jnp.ravel(jnp.maximum(jnp.asarray(g(tick)), 0.0)) * jnp.sqrt(weight * ts),
-    )
+    """``weight·∫ Σ max(0, g(tick))² dt``: a soft path constraint ``g ≤ 0`` (e.g. ``|y| − y_max``); a sum
+    of squares (with residuals) for a non-negative ``weight``."""
+    residual = None
+    if float(weight) >= 0:
+
+        def residual(tick, ts):
+            return jnp.ravel(jnp.maximum(jnp.asarray(g(tick)), 0.0)) * jnp.sqrt(weight * ts)
+
+    return additive(lambda tick, ts: weight * jnp.sum(jnp.maximum(jnp.asarray(g(tick)), 0.0) ** 2) * ts, residual)
 
 
 def terminal(fn: Callable[[Tick], jax.Array]) -> RunningCost:

@@ -188,6 +188,7 @@ def test_objective_residual_squares_to_the_rate():
     assert float(r @ r) == pytest.approx(float(obj.rate(tick, ts)), rel=1e-14)
     assert costs.combine(a=costs.ise(), b=costs.itae()).residual is None
     assert costs.combine(a=(-1.0, costs.ise())).residual is None
+    assert costs.penalty(lambda tk: tk.y, weight=-1.0).residual is None  # a reward, not a square
 
 
 def test_the_pure_kernel_vmaps_like_a_loop():
