@@ -35,7 +35,7 @@ from experiments import figures, stages
 from experiments.runner import Study, StudyResult, paper_facts
 from jaxsim.control import speed_gradient as sg
 from jaxsim.core.costs import Breakdown
-from jaxsim.core.integrators import RK4
+from jaxsim.core.integrators import RK4, RK4_ROLLED
 from jaxsim.plants import helicopter_3dof as heli
 from jaxsim.problem import Param, ParamSpace, Problem
 
@@ -48,20 +48,6 @@ LOW_OPT = {"xla_backend_optimization_level": 0, "xla_llvm_disable_expensive_pass
 def compile_low(fn: Callable[..., Any], *args: Any) -> Any:
     """``jit(fn)`` compiled for ``args`` with :data:`LOW_OPT`, then called on them."""
     return jax.jit(fn).lower(*args).compile(LOW_OPT)(*args)
-
-
-def rk4_rolled(f: Callable[[jax.Array, jax.Array], jax.Array], t: jax.Array, x: jax.Array, dt: jax.Array) -> jax.Array:
-    """The classical RK4 step with its four stages in a ``lax.scan`` (the Lagrangian plant is traced once,
-    not four times: a quarter of the compile time; same arithmetic as :data:`jaxsim.core.integrators.RK4`)."""
-
-    def stage(carry, cw):
-        k_prev, acc = carry
-        k = f(t + cw[0] * dt, x + cw[0] * dt * k_prev)
-        return (k, acc + cw[1] * k), None
-
-    cw = jnp.array([[0.0, 1 / 6], [0.5, 1 / 3], [0.5, 1 / 3], [1.0, 1 / 6]])
-    (_, acc), _ = jax.lax.scan(stage, (jnp.zeros_like(x), jnp.zeros_like(x)), cw)
-    return x + dt * acc
 
 
 @dataclass(frozen=True)
@@ -152,7 +138,7 @@ def plant_rollout(
     dt = jnp.asarray(dt, float)
 
     def body(z, t):
-        z1 = rk4_rolled(f, t, z, dt)
+        z1 = RK4_ROLLED.step(f, t, z, dt)  # the Lagrangian plant traced once per step
         return z1, z1
 
     _, zs = jax.lax.scan(body, z0, dt * jnp.arange(n))

@@ -85,3 +85,21 @@ def test_integrators_are_differentiable():
     h = 1e-6
     fd = (final(h) - final(-h)) / (2 * h)
     np.testing.assert_allclose(g, fd, rtol=1e-7)
+
+
+def test_rolled_rk4_equals_rk4_and_traces_the_field_once():
+    from jaxsim.core.integrators import RK4_ROLLED
+
+    calls = []
+
+    def f(t, x):
+        calls.append(1)
+        return jnp.array([x[1], -jnp.sin(x[0]) - 0.1 * x[1] + jnp.cos(t)])
+
+    x = jnp.array([1.2, -0.3])
+    ref = RK4.step(f, 0.7, x, 0.05)
+    calls.clear()
+    rolled = RK4_ROLLED.step(f, 0.7, x, 0.05)
+    assert len(calls) == 1  # the field is traced once, inside the scan
+    np.testing.assert_allclose(rolled, ref, rtol=1e-14, atol=1e-15)
+    assert RK4_ROLLED.order == RK4.order
