@@ -179,6 +179,25 @@ def _bounded(loss: jax.Array, cap: float = 1e8) -> jax.Array:
     return jnp.where(jnp.isfinite(loss), jnp.minimum(loss, cap), cap)
 
 
+def _roll_problem(
+    name: str,
+    space: ParamSpace,
+    run: Callable[[Any, jax.Array, jax.Array, jax.Array], Run],
+    amplitudes: Any,
+    omegas: Any,
+    t_from: float,
+) -> Problem:
+    """The tuning problem shared by both controllers: ``run(params, amplitude, omega, key) -> Run``
+    scored by the mean-square error over ``t ≥ t_from`` in arcmin² (:func:`_bounded`), averaged over the
+    roll scenarios ``(amplitudes[i], omegas[i])``."""
+
+    def loss(p, draw, key):
+        return _bounded((rms(run(p, draw["amplitude"], draw["omega"], key), t_from) / gs.ARCMIN) ** 2)
+
+    scenarios = {"amplitude": jnp.asarray(amplitudes, float), "omega": jnp.asarray(omegas, float)}
+    return Problem.from_loss(name, space, loss, scenarios=scenarios)
+
+
 def modal_problem(
     plant: gs.StabiliserParams,
     omega_model: float,
@@ -203,24 +222,13 @@ def modal_problem(
         ratio=Param(lo=3.0, hi=20.0, init=10.0, log=True),  # paper: an order of magnitude faster
     )
 
-    def loss(p, draw, key):
+    def run(p, amplitude, omega, key):
         design = mo.modal_design(a, b, c, omega_model, p["radius"] * w0, p["ratio"])
-        run = simulate_modal(
-            plant,
-            design,
-            draw["amplitude"],
-            draw["omega"],
-            t_final=t_final,
-            dt=dt,
-            stride=stride,
-            eps=eps,
-            key=key,
-            sigma=sigma,
+        return simulate_modal(
+            plant, design, amplitude, omega, t_final=t_final, dt=dt, stride=stride, eps=eps, key=key, sigma=sigma
         )
-        return _bounded((rms(run, t_from) / gs.ARCMIN) ** 2)
 
-    scenarios = {"amplitude": jnp.asarray(amplitudes, float), "omega": jnp.asarray(omegas, float)}
-    return Problem.from_loss("backlash_stabiliser_modal", space, loss, scenarios=scenarios)
+    return _roll_problem("backlash_stabiliser_modal", space, run, amplitudes, omegas, t_from)
 
 
 def pid_problem(
@@ -243,23 +251,12 @@ def pid_problem(
     k0 = {"kp": 3 * j * wc**2, "ki": j * wc**3, "kd": 3 * j * wc}
     space = ParamSpace(**{k: Param(lo=v / 10, hi=v * 10, init=v, log=True) for k, v in k0.items()})
 
-    def loss(p, draw, key):
-        run = simulate_pid(
-            plant,
-            p,
-            draw["amplitude"],
-            draw["omega"],
-            t_final=t_final,
-            dt=dt,
-            stride=stride,
-            eps=eps,
-            key=key,
-            sigma=sigma,
+    def run(p, amplitude, omega, key):
+        return simulate_pid(
+            plant, p, amplitude, omega, t_final=t_final, dt=dt, stride=stride, eps=eps, key=key, sigma=sigma
         )
-        return _bounded((rms(run, t_from) / gs.ARCMIN) ** 2)
 
-    scenarios = {"amplitude": jnp.asarray(amplitudes, float), "omega": jnp.asarray(omegas, float)}
-    return Problem.from_loss("backlash_stabiliser_pid", space, loss, scenarios=scenarios)
+    return _roll_problem("backlash_stabiliser_pid", space, run, amplitudes, omegas, t_from)
 
 
 def roll_scenarios(

@@ -183,18 +183,26 @@ class Problem:
             value = jnp.asarray(out)
             return Breakdown({"loss": value}, value)
         sc = self.scenario(params, draw)
-        k = key if key is not None else (sc.key if sc.key is not None else self.key)
-        return rollout_cost(self.objective, sc.loop, sc.x0, sc.timing, k, sc.solver)
+        return rollout_cost(self.objective, sc.loop, sc.x0, sc.timing, self._noise_key(sc, key), sc.solver)
 
-    def scenario_totals(self, params: Any) -> jax.Array:
-        """``(S,)`` totals of every scenario (``(1,)`` for the nominal one)."""
+    def _noise_key(self, sc: Scenario, key: jax.Array | None) -> jax.Array:
+        """The noise key of a rollout: ``key`` if given, else the scenario's, else the problem's."""
+        return key if key is not None else (sc.key if sc.key is not None else self.key)
+
+    def _per_scenario(self, fn: Callable[[dict[str, Any] | None, jax.Array | None], jax.Array]) -> jax.Array:
+        """``fn(draw, key)`` stacked over the scenarios (a leading axis ``S``; ``(1, …)`` for the nominal
+        one, ``fn(None, None)``); ``key`` is the scenario's own noise key or ``None``."""
         if not self.scenarios:
-            return self.evaluate(params).total[None]
+            return fn(None, None)[None]
         draws = dict(self.scenarios)
         keys = draws.pop("key", None)
         if keys is None:
-            return jax.vmap(lambda d: self.evaluate(params, d).total)(draws)
-        return jax.vmap(lambda d, k: self.evaluate(params, d, k).total)(draws, keys)
+            return jax.vmap(lambda d: fn(d, None))(draws)
+        return jax.vmap(fn)(draws, keys)
+
+    def scenario_totals(self, params: Any) -> jax.Array:
+        """``(S,)`` totals of every scenario (``(1,)`` for the nominal one)."""
+        return self._per_scenario(lambda d, k: self.evaluate(params, d, k).total)
 
     def loss(self, params: Any) -> jax.Array:
         """The tuning loss: ``reduce`` over the scenario totals (the nominal total without scenarios).
@@ -229,18 +237,13 @@ class Problem:
 
         def one(draw: dict[str, Any] | None, key: jax.Array | None) -> jax.Array:
             sc = self.scenario(params, draw)
-            k = key if key is not None else (sc.key if sc.key is not None else self.key)
             timing = dataclasses.replace(sc.timing, save_every=1)
-            tr = simulate(sc.loop, sc.x0, timing, k, sc.solver)
+            tr = simulate(sc.loop, sc.x0, timing, self._noise_key(sc, key), sc.solver)
             ts = jnp.asarray(timing.ts, tr.t.dtype)
             ticks = Tick(*tr[: len(Tick._fields)])
             return jnp.ravel(jax.vmap(lambda tick: self.objective.residual(tick, ts))(ticks))
 
-        if not self.scenarios:
-            return one(None, None)
-        draws = dict(self.scenarios)
-        keys = draws.pop("key", None)
-        per = jax.vmap(one)(draws, keys) if keys is not None else jax.vmap(lambda d: one(d, None))(draws)
+        per = self._per_scenario(one)
         return jnp.ravel(per) / jnp.sqrt(per.shape[0])
 
     def violation(self, params: Any) -> jax.Array:
@@ -263,8 +266,7 @@ class Problem:
     def simulate(self, params: Any, draw: dict[str, Any] | None = None, key: jax.Array | None = None) -> Trajectory:
         """The stored trajectory of one scenario (figures)."""
         sc = self.scenario(params, draw)
-        k = key if key is not None else (sc.key if sc.key is not None else self.key)
-        return simulate(sc.loop, sc.x0, sc.timing, k, sc.solver)
+        return simulate(sc.loop, sc.x0, sc.timing, self._noise_key(sc, key), sc.solver)
 
     # ------------------------------------------------------------------ uncertainty
     def sample(self, key: Any, n: int) -> dict[str, jax.Array]:
