@@ -37,20 +37,11 @@ from jaxsim.core.least_squares import CONVERGED, STATUS, levenberg_marquardt_sol
 from jaxsim.problem import Problem
 from jaxsim.problem.reparam import apply, check_domain, invert
 from optim.compile_cache import LRUCache, callable_key, key_or_none
-from optim.results import History, TuneResult, check_int, check_some_loss_finite
+from optim.results import History, TuneResult, check_int, check_number, check_some_loss_finite
 
 JacobianMode = Literal["auto", "forward", "reverse"]
 
 _COMPILED = LRUCache()
-
-
-def _check_positive(name: str, value: Any, allow_zero: bool = False) -> float:
-    v = float(value)
-    if not np.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
-        raise ValueError(
-            f"{name}: must be a finite {'non-negative' if allow_zero else 'positive'} number, got {value!r}"
-        )
-    return v
 
 
 def levenberg_marquardt(
@@ -100,11 +91,11 @@ def levenberg_marquardt(
         raise ValueError("params0: required with a residual function (a Problem supplies space.init)")
     max_steps = check_int("max_steps", max_steps, low=0)
     sims_per_eval = check_int("sims_per_eval", 1 if sims_per_eval is None else sims_per_eval)
-    damping = _check_positive("damping", damping)
+    damping = check_number("damping", damping)
     gtol, xtol, ftol = (
-        _check_positive(n, v, allow_zero=True) for n, v in (("gtol", gtol), ("xtol", xtol), ("ftol", ftol))
+        check_number(n, v, allow_zero=True) for n, v in (("gtol", gtol), ("xtol", xtol), ("ftol", ftol))
     )
-    jac_cost = _check_positive("jac_cost", jac_cost)
+    jac_cost = check_number("jac_cost", jac_cost)
     if jac not in ("auto", "forward", "reverse"):
         raise ValueError(f"jac: must be 'auto', 'forward' or 'reverse', got {jac!r}")
     x0 = jax.tree_util.tree_map(lambda a: jnp.asarray(a, dtype=jnp.result_type(a, float)), params0)

@@ -98,6 +98,18 @@ def as_box(lo: Any, hi: Any) -> tuple[jnp.ndarray, jnp.ndarray]:
     return jnp.asarray(a), jnp.asarray(b)
 
 
+def check_number(name: str, value: Any, *, allow_zero: bool = False) -> float:
+    """Require a finite positive (or non-negative) number; return it as ``float``."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: must be a number, got {value!r}") from None
+    if not np.isfinite(v) or (v < 0 if allow_zero else v <= 0):
+        rel = "non-negative" if allow_zero else "positive"
+        raise ValueError(f"{name}: must be finite and {rel}, got {value!r}")
+    return v
+
+
 def check_some_loss_finite(best_loss: float, where: str, hint: str = "") -> None:
     """Raise the error every tuner and search shares when no evaluated loss was finite.
 

@@ -73,7 +73,7 @@ from jaxsim.core.validation import check_finite
 from jaxsim.problem import Problem
 from jaxsim.problem.reparam import apply, check_domain, invert
 from optim.compile_cache import LRUCache, callable_key, key_or_none
-from optim.results import History, TuneResult, check_int, check_some_loss_finite
+from optim.results import History, TuneResult, check_int, check_number, check_some_loss_finite
 
 FORWARD_MODE_MAX_PARAMS = 32
 """``mode="auto"`` uses forward mode while unconstrained parameters × starts stay at most this.
@@ -142,18 +142,6 @@ def _ranking(f, v, m, bf, bv, bm, tol, rtol, feasible_first):
 
 def _tree_where(c: jax.Array, a: Any, b: Any) -> Any:
     return jax.tree_util.tree_map(lambda x, y: jnp.where(c, x, y), a, b)
-
-
-def _check_number(name: str, value: Any, *, allow_zero: bool = False) -> float:
-    """Require a finite positive (or non-negative) number; return it as ``float``."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}: must be a number, got {value!r}") from None
-    if not np.isfinite(v) or (v < 0 if allow_zero else v <= 0):
-        rel = "non-negative" if allow_zero else "positive"
-        raise ValueError(f"{name}: must be finite and {rel}, got {value!r}")
-    return v
 
 
 class _Settings(NamedTuple):
@@ -490,7 +478,7 @@ def gradient_tuner(
     steps_per_call = check_int("steps_per_call", steps_per_call)
     if patience is not None:
         patience = check_int("patience", patience)
-    spread = _check_number("init_spread", init_spread, allow_zero=True)
+    spread = check_number("init_spread", init_spread, allow_zero=True)
     if constraint_method not in ("penalty", "augmented_lagrangian"):
         raise ValueError(f"constraint_method: must be 'penalty' or 'augmented_lagrangian', got {constraint_method!r}")
     if mode not in ("auto", "forward", "reverse"):
@@ -502,10 +490,10 @@ def gradient_tuner(
     u_template = jax.eval_shape(lambda x: invert(r.reparam, x), template)
     n_params = int(sum(np.prod(leaf.shape) for leaf in jax.tree_util.tree_leaves(u_template)))
     cfg = _Settings(
-        w=_check_number("penalty_weight", r.penalty_weight),
-        tol=_check_number("constraint_tol", constraint_tol, allow_zero=True),
-        rtol=_check_number("rtol", rtol, allow_zero=True),
-        gtol=_check_number("gtol", gtol, allow_zero=True),
+        w=check_number("penalty_weight", r.penalty_weight),
+        tol=check_number("constraint_tol", constraint_tol, allow_zero=True),
+        rtol=check_number("rtol", rtol, allow_zero=True),
+        gtol=check_number("gtol", gtol, allow_zero=True),
         patience=patience,
         multiplier_every=check_int("multiplier_every", multiplier_every),
         al=r.constraints is not None and constraint_method == "augmented_lagrangian",
@@ -844,7 +832,7 @@ def tune(
         if grad_cost != "measure":
             raise ValueError(f"grad_cost: must be None, 'measure' or a positive number, got {grad_cost!r}")
     else:
-        grad_cost = _check_number("grad_cost", grad_cost)
+        grad_cost = check_number("grad_cost", grad_cost)
     t0 = time.perf_counter()
     tuner = gradient_tuner(
         loss,
