@@ -29,6 +29,7 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
+from jaxsim.core.rotations import quat_exp, quat_mul, quat_rotation_vector
 from jaxsim.core.validation import check_positive, check_shape
 
 __all__ = [
@@ -48,35 +49,6 @@ __all__ = [
 
 SAMPLES_PER_UPDATE = {"first_order": 1, "two_sample_previous": 1, "two_sample": 2, "three_sample": 3}
 ALGORITHMS = tuple(SAMPLES_PER_UPDATE)
-
-
-def quat_mul(p: jax.Array, q: jax.Array) -> jax.Array:
-    """Hamilton product ``p ⊗ q`` of ``[w, x, y, z]`` quaternions."""
-    pw, pv = p[..., 0], p[..., 1:]
-    qw, qv = q[..., 0], q[..., 1:]
-    w = pw * qw - jnp.sum(pv * qv, axis=-1)
-    v = pw[..., None] * qv + qw[..., None] * pv + jnp.cross(pv, qv)
-    return jnp.concatenate([w[..., None], v], axis=-1)
-
-
-def quat_exp(phi: jax.Array) -> jax.Array:
-    """Unit quaternion of the rotation vector ``phi (..., 3)`` (rad); exact, smooth at 0."""
-    angle2 = jnp.sum(phi * phi, axis=-1, keepdims=True)
-    angle = jnp.sqrt(jnp.where(angle2 > 0, angle2, 1.0))
-    half = 0.5 * angle
-    # sin(|φ|/2)/|φ| with its series near 0
-    k = jnp.where(angle2 > 1e-8, jnp.sin(half) / angle, 0.5 - angle2 / 48.0)
-    w = jnp.where(angle2 > 1e-8, jnp.cos(half), 1.0 - angle2 / 8.0)
-    return jnp.concatenate([w, k * phi], axis=-1)
-
-
-def quat_rotation_vector(q: jax.Array) -> jax.Array:
-    """Rotation vector (rad) of a unit quaternion (the shorter rotation)."""
-    q = jnp.where(q[..., :1] < 0, -q, q)
-    v = q[..., 1:]
-    s = jnp.linalg.norm(v, axis=-1, keepdims=True)
-    angle = 2.0 * jnp.arctan2(s, q[..., :1])
-    return jnp.where(s > 1e-12, angle / jnp.where(s > 1e-12, s, 1.0), 2.0) * v
 
 
 def coning_attitude(t: Any, alpha: Any, omega: Any) -> jax.Array:
