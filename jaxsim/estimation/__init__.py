@@ -21,8 +21,8 @@ paper 2), :mod:`~.hankel_predictor` (seed 000, paper 6), :mod:`~.leader_predicto
 sliding-window LS + multi-rate Kalman prediction of a target point between camera frames) and seed
 003's vessel tracker: :mod:`~.window_selector` (α–β window bank + Sugeno window selector),
 :mod:`~.motion_models` (CV / coordinated turn, CV+CT IMM), :mod:`~.track_loss` (gate events and
-their soft surrogate); :mod:`~.wind` (seed 004 #11: wind from air data + INS and its Kalman model), :mod:`~.dc_prediction`
-(seed 004 #30: constrained prediction of GNSS differential corrections).
+their soft surrogate); :mod:`~.wind` (seed 004 #11: wind from air data + INS and its Kalman model),
+:mod:`~.dc_prediction` (seed 004 #30: constrained prediction of GNSS differential corrections).
 """
 
 from jaxsim.estimation.adapters import (
