@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -37,7 +38,7 @@ def test_measurement_matrix_against_finite_differences():
     error model (1): Δf = Δf⁰ + Γ f + (ω × f) τ + k_f T, with Γ lower triangular."""
     rng = np.random.default_rng(1)
     th, T = 0.9, 3.0
-    F, H = bc.step_matrices(1, 0.25, th, T, LAT, 1.0, skew=True, thermal=True)
+    F, H = jax.jit(lambda: bc.step_matrices(1, 0.25, th, T, LAT, 1.0, skew=True, thermal=True))()
     A, om, f = (np.asarray(a) for a in bc.kinematics(1, 0.25, th, LAT))
     x = rng.standard_normal(28)
     beta, df0, gam, tau, kf = x[:3], x[3:6], x[6:12], x[24], x[25:28]
@@ -59,7 +60,7 @@ def test_measurement_matrix_against_finite_differences():
 
 def _small_model():
     plan = bc.plan_from_segments([0, 0, 1, 2], [0.0, 0.3, 0.2, 0.4], [3, 5, 6, 6], 1.0)
-    F, H = bc.model_arrays(plan, LAT, 1.0)
+    F, H = jax.jit(lambda p: bc.model_arrays(p, LAT, 1.0))(plan)
     Q, R = bc.noise(24, 1.0, 1e-5, 1e-4)
     return F, H, Q, R
 
@@ -71,7 +72,7 @@ def test_information_and_gains_against_numpy():
     for k in range(F.shape[0]):
         J += (H[k] @ psi).T @ np.linalg.inv(R) @ (H[k] @ psi)
         psi = F[k] @ psi
-    np.testing.assert_allclose(np.asarray(bc.information(F, H, R)), J, rtol=1e-10, atol=1e-6)
+    np.testing.assert_allclose(np.asarray(jax.jit(bc.information)(F, H, R)), J, rtol=1e-10, atol=1e-6)
     P0 = np.diag(np.r_[np.full(3, 1e-3), np.full(3, 1e-2), np.full(6, 1e-3), np.full(3, 1e-4), np.full(9, 1e-3)] ** 2)
     P = P0.copy()
     Ks = []
@@ -81,7 +82,7 @@ def test_information_and_gains_against_numpy():
         post = P - K @ S @ K.T
         Ks.append(K)
         P = F[k] @ post @ F[k].T + Q
-    K, Pn = bc.gains(*(jnp.asarray(a) for a in (F, H, Q, R, P0)))
+    K, Pn = jax.jit(bc.gains)(*(jnp.asarray(a) for a in (F, H, Q, R, P0)))
     np.testing.assert_allclose(np.asarray(K), np.array(Ks), rtol=1e-6, atol=1e-12)
     np.testing.assert_allclose(np.asarray(Pn), post, rtol=1e-6, atol=1e-20)
 
