@@ -5,8 +5,8 @@ Discrete problem (scaled time ``τ ∈ [0, 1]``, scaled torque ``ũ``, see
 :func:`jaxsim.plants.orbital_station.scaled_rhs`): ``N`` piecewise-constant torque intervals,
 ``substeps`` RK4 steps each; fuel ``Σ_k Σ_i s(ũ_ik)·Δτ`` with the smoothed
 ``s(v) = √(v² + ε²) − ε``; terminal conditions ``vec(q_f* ⊗ q_N) = 0`` (sign-invariant) and
-``Ω_N = Ω_rest(q_f)``.  This module holds the problem's pieces (:func:`rollout`, :func:`fuel`,
-:func:`terminal_error`); the solvers (JAX multi-start shooting, CasADi collocation) are not written yet.
+``Ω_N = Ω_rest(q_f)``.  :func:`shoot` solves it by SQP (Gauss–Newton-type Hessian), vmapped over
+starts by :func:`multi_start`; :mod:`optim.casadi_slew` is the same problem in CasADi/IPOPT.
 """
 
 from __future__ import annotations
@@ -142,3 +142,43 @@ def standard_slew_torque(t: jax.Array, p: st.StationParams, duration: float, yaw
     c = st.nadir_body(q)
     n = p.orbit_rate
     return inertia * wdot + jnp.cross(w, inertia * w) - 3 * n * n * jnp.cross(c, inertia * c)
+
+
+def shoot(
+    u0: jax.Array, prob: SlewProblem, *, iters: int = 30, floor: float = 1e-3, max_step: float = 5.0
+) -> dict[str, jax.Array]:
+    """SQP shooting from torques ``u0 (N, 3)``: each iteration solves the KKT system of the smoothed
+    fuel with the terminal conditions linearised by forward-mode autodiff; the Hessian is the fuel's
+    own (diagonal, exact) plus ``floor`` — the constraints' curvature is left out, so convergence is
+    linear, not quadratic; the step is capped at ``max_step`` (scaled torque, ∞-norm).
+    Returns ``u``, smoothed ``fuel``, terminal ``error`` (6,)."""
+    shape = u0.shape
+
+    def err(z: jax.Array) -> jax.Array:
+        return terminal_error(rollout(z.reshape(shape), prob)[-1], prob)
+
+    def f(z: jax.Array) -> jax.Array:
+        return fuel(z.reshape(shape), prob)
+
+    def step(carry: tuple[jax.Array, jax.Array], _: Any) -> tuple[tuple[jax.Array, jax.Array], None]:
+        z, lam = carry
+        e, a = err(z), jax.jacfwd(err)(z)
+        curv = prob.eps**2 / (z * z + prob.eps**2) ** 1.5 / prob.n_intervals  # s''(z)/N
+        h = jnp.diag(curv + floor)
+        k = jnp.block([[h, a.T], [a, jnp.zeros((6, 6))]])
+        sol = jnp.linalg.solve(k, -jnp.concatenate([jax.grad(f)(z), e]))
+        d = sol[: z.size]
+        d = d * jnp.minimum(1.0, max_step / jnp.max(jnp.abs(d)))
+        return (z + d, sol[z.size :]), None
+
+    (z, _lam), _ = jax.lax.scan(step, (u0.ravel(), jnp.zeros(6)), None, length=iters)
+    u = z.reshape(shape)
+    return {"u": u, "fuel": fuel(u, prob), "error": err(z)}
+
+
+def multi_start(
+    key: jax.Array, n_starts: int, prob: SlewProblem, scale: float = 3.0, **kw: Any
+) -> dict[str, jax.Array]:
+    """:func:`shoot` vmapped over ``n_starts`` Gaussian starts ``u0 ~ N(0, scale²)``."""
+    u0 = scale * jax.random.normal(key, (n_starts, prob.n_intervals, 3))
+    return jax.vmap(lambda u: shoot(u, prob, **kw))(u0)
