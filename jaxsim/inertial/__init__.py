@@ -8,7 +8,10 @@ gyro-carousel least squares, attitude update algorithms.
 * :mod:`jaxsim.inertial.carousel` — heading from a continuously rotated gyro by batch least squares,
   and its differentiable error budget (white noise, bias random walk, turntable-rate error);
 * :mod:`jaxsim.inertial.attitude` — quaternion attitude updates from gyro increments (first order,
-  two- and three-sample coning corrections), classical coning motion and its closed-form drift.
+  two- and three-sample coning corrections), classical coning motion and its closed-form drift;
+* :mod:`jaxsim.inertial.bench_calibration` — the 24-state IMU bench-calibration model on a single-axis
+  table (seed 004 B3): rotation plans, information-matrix observability ranks, covariance runs
+  (imported by full path).
 
 The Allan-variance estimator itself is :mod:`jaxsim.estimation.allan`.
 """

@@ -27,6 +27,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxsim.core.rotations import skew as skew_matrix
 from jaxsim.estimation import kalman
 from jaxsim.estimation.types import GaussianState
 from jaxsim.inertial.carousel import EARTH_RATE
@@ -64,15 +65,11 @@ def plan_from_segments(axes, rates, steps, dt: float, temperature=None) -> Plan:
     return Plan(axis, rate, rate * within, temp)
 
 
-def _skew(v: jax.Array) -> jax.Array:
-    return jnp.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-
-
 def attitude(axis: jax.Array, angle: jax.Array) -> jax.Array:
     """``A_zx (3, 3)``: instrument axis ``axis`` East, rotated by ``angle`` (rad) about it (eq. 4 for axis 0)."""
     e = jax.nn.one_hot(axis, 3)
     c, s = jnp.cos(angle), jnp.sin(angle)
-    rot = c * jnp.eye(3) + (1 - c) * jnp.outer(e, e) - s * _skew(e)
+    rot = c * jnp.eye(3) + (1 - c) * jnp.outer(e, e) - s * skew_matrix(e)
     return rot @ _BASE[axis]
 
 
@@ -111,7 +108,7 @@ def step_matrices(
     u = earth_rate * jnp.array([0.0, jnp.cos(latitude), jnp.sin(latitude)])
     Fg = jnp.array([[f[0], 0, 0, 0, 0, 0], [0, f[0], f[1], 0, 0, 0], [0, 0, 0, f[0], f[1], f[2]]])
     Om = jnp.kron(jnp.eye(3), w[None, :])  # Θ ω = Om vec(Θ) (row-major)
-    top = jnp.concatenate([-_skew(u), jnp.zeros((3, 9)), Axz, Axz @ Om], axis=1)
+    top = jnp.concatenate([-skew_matrix(u), jnp.zeros((3, 9)), Axz, Axz @ Om], axis=1)
     G = jnp.array([[0.0, -gravity, 0], [gravity, 0, 0], [0, 0, 0]])
     H = jnp.concatenate([G, Axz, Axz @ Fg, jnp.zeros((3, 12))], axis=1)
     extra = []

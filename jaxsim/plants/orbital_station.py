@@ -25,6 +25,8 @@ from dataclasses import dataclass
 import jax
 import jax.numpy as jnp
 
+from jaxsim.core.rotations import quat_mul
+
 __all__ = [
     "StationParams",
     "dcm",
@@ -50,17 +52,10 @@ class StationParams:
     isp: float = 280.0  # s, bipropellant jets (assumed)
 
 
-def quat_mul(p: jax.Array, q: jax.Array) -> jax.Array:
-    """Hamilton product ``p ⊗ q`` of ``[w, x, y, z]`` quaternions (``(..., 4)``)."""
-    pw, pv = p[..., 0], p[..., 1:]
-    qw, qv = q[..., 0], q[..., 1:]
-    w = pw * qw - jnp.sum(pv * qv, axis=-1)
-    v = pw[..., None] * qv + qw[..., None] * pv + jnp.cross(pv, qv)
-    return jnp.concatenate([w[..., None], v], axis=-1)
-
-
 def dcm(q: jax.Array) -> jax.Array:
-    """``R(q)`` (3, 3): body → orbital rotation matrix of a unit quaternion ``[w, x, y, z]``."""
+    """``R(q)`` (3, 3): body → orbital rotation matrix of a unit quaternion ``[w, x, y, z]`` — the
+    polynomial form without normalisation (unlike :func:`jaxsim.core.rotations.rotation_from_quat`), as
+    the CasADi model writes it, so both agree to rounding off the unit sphere (inside RK4 stages)."""
     w, x, y, z = q[0], q[1], q[2], q[3]
     return jnp.array(
         [
