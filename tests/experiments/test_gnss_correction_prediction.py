@@ -5,10 +5,9 @@ SciPy's SLSQP fits, the claims kept as computed."""
 import jax
 import numpy as np
 import pytest
-import scipy.optimize
 
 from experiments.gnss_correction_prediction import STUDY, corrections, windows
-from jaxsim.estimation import dc_prediction as dp
+from tests.estimation.test_dc_prediction import slsqp_fit
 from tests.experiments.study_cli import run_quick_study
 
 
@@ -58,23 +57,10 @@ def test_constrained_linear_rms_against_slsqp_fits(study_output, test_windows):
     cfg, n, past, future = test_windows
     row = rows_by(res)[("LPO", n)]
     c, psi = row["c"], row["psi"]
-    s = np.arange(n) / (2 * n - 1)
-    a = c * np.stack([np.ones_like(s), s, s * s], axis=1)
-    grid = np.linspace(0, 1, dp.GRID)
-    basis = np.stack([np.ones_like(grid), grid, grid**2], axis=1)
-    slope = np.stack([np.zeros_like(grid), np.ones_like(grid), 2 * grid], axis=1)
-    g = np.vstack([basis, -basis, slope, -slope])
-    h = np.r_[np.ones(2 * dp.GRID), psi * np.ones(2 * dp.GRID)]
     s0 = (n - 1) / (2 * n - 1)
     preds = []
     for d in past:
-        b = scipy.optimize.minimize(
-            lambda x: np.mean((d - a @ x) ** 2),
-            np.zeros(3),
-            method="SLSQP",
-            constraints=[{"type": "ineq", "fun": lambda x: h - g @ x}],
-            options={"ftol": 1e-15, "maxiter": 500},
-        ).x
+        b = slsqp_fit(d, n, c, psi)
         value = c * (b[0] + b[1] * s0 + b[2] * s0**2)
         preds.append(value + c * (b[1] + 2 * b[2] * s0) * (1 - s0))
     assert row["rms_test_m"] == pytest.approx(np.sqrt(np.mean((np.array(preds) - future) ** 2)), rel=1e-4)
