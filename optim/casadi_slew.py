@@ -10,12 +10,12 @@ free (the RK4 map keeps their norm to the integration error).
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import Any, Sequence
 
 import casadi as ca
 import numpy as np
 
-from jaxsim.control.station_slew import SlewProblem
+from jaxsim.control.station_slew import SlewProblem, rest_state_scaled
 
 
 def _quat_mul(p: Any, q: Any) -> Any:
@@ -49,10 +49,8 @@ def scaled_ode(prob: SlewProblem) -> ca.Function:
     return ca.Function("f", [x, u], [ca.vertcat(qdot, wdot)])
 
 
-def solve(prob: SlewProblem, u0: np.ndarray | None = None, *, tol: float = 1e-10) -> dict[str, Any]:
-    """IPOPT on the multiple-shooting NLP.  ``u0 (N, 3)``: initial torques (zeros if None); node
-    states start on the interpolation between the rest states.  Returns ``u`` (N, 3), ``fuel``
-    (smoothed, scaled), ``x`` (N+1, 7), ``status``, ``iterations``, ``wall_s``."""
+def _solver(prob: SlewProblem, tol: float) -> tuple[Any, np.ndarray, np.ndarray]:
+    """The IPOPT solver of the multiple-shooting NLP, and the initial and final rest states."""
     f = scaled_ode(prob)
     n_int, m = prob.n_intervals, prob.substeps
     h = 1.0 / (n_int * m)
@@ -70,9 +68,7 @@ def solve(prob: SlewProblem, u0: np.ndarray | None = None, *, tol: float = 1e-10
     U = ca.MX.sym("U", 3, n_int)
     x0 = np.asarray(prob.x0())
     qf = np.asarray(prob.qf())
-    from jaxsim.control.station_slew import _scaled_rest
-
-    xf = np.asarray(_scaled_rest(prob.qf(), prob))
+    xf = np.asarray(rest_state_scaled(prob.qf(), prob))
     g = [X[:, 0] - x0]
     g += [X[:, k + 1] - step(X[:, k], U[:, k]) for k in range(n_int)]
     conj = ca.DM([qf[0], -qf[1], -qf[2], -qf[3]])
@@ -80,31 +76,59 @@ def solve(prob: SlewProblem, u0: np.ndarray | None = None, *, tol: float = 1e-10
     eps = prob.eps
     cost = ca.sum1(ca.sum2(ca.sqrt(U * U + eps * eps) - eps)) / n_int
     nlp = {"x": ca.vertcat(ca.vec(X), ca.vec(U)), "f": cost, "g": ca.vertcat(*g)}
-    solver = ca.nlpsol(
-        "slew",
-        "ipopt",
-        nlp,
-        {
-            "ipopt.print_level": 0,
-            "print_time": False,
-            "ipopt.tol": tol,
-            "ipopt.constr_viol_tol": tol,
-            "ipopt.sb": "yes",
-        },
-    )
+    options = {
+        "ipopt.print_level": 0,
+        "print_time": False,
+        "ipopt.tol": tol,
+        "ipopt.constr_viol_tol": tol,
+        "ipopt.sb": "yes",
+    }
+    return ca.nlpsol("slew", "ipopt", nlp, options), x0, xf
+
+
+def solve_many(
+    prob: SlewProblem,
+    starts: Sequence[np.ndarray | None],
+    *,
+    states: Sequence[np.ndarray] | None = None,
+    tol: float = 1e-10,
+) -> list[dict[str, Any]]:
+    """IPOPT on the multiple-shooting NLP from each initial torque history in ``starts`` (each
+    ``(N, 3)`` scaled torques, or None for zeros), the solver built once.  Node states start at
+    ``states[k]`` (``(N+1, 7)``, e.g. the rollout of ``starts[k]``, to warm-start at a known solution)
+    or, without ``states``, on the interpolation between the rest states.  Each result: ``u`` (N, 3),
+    ``fuel`` (smoothed, scaled), ``x`` (N+1, 7), ``status``, ``iterations``, ``wall_s``."""
+    n_int = prob.n_intervals
+    solver, x0, xf = _solver(prob, tol)
     s = np.linspace(0, 1, n_int + 1)[None]
     xg = (1 - s) * x0[:, None] + s * xf[:, None]
-    ug = np.zeros((3, n_int)) if u0 is None else np.asarray(u0).T
-    t0 = time.perf_counter()
-    sol = solver(x0=np.concatenate([xg.ravel(order="F"), ug.ravel(order="F")]), lbg=0, ubg=0)
-    wall = time.perf_counter() - t0
-    z = np.asarray(sol["x"]).ravel()
     nx = 7 * (n_int + 1)
-    return {
-        "u": z[nx:].reshape(n_int, 3),
-        "x": z[:nx].reshape(n_int + 1, 7),
-        "fuel": float(sol["f"]),
-        "status": solver.stats()["return_status"],
-        "iterations": int(solver.stats()["iter_count"]),
-        "wall_s": wall,
-    }
+    results = []
+    if states is not None and len(states) != len(starts):
+        raise ValueError(f"states: need one (N+1, 7) array per start ({len(starts)}), got {len(states)}")
+    for k, u0 in enumerate(starts):
+        ug = np.zeros((3, n_int)) if u0 is None else np.asarray(u0).T
+        if states is not None:
+            xg = np.asarray(states[k]).T
+            if xg.shape != (7, n_int + 1):
+                raise ValueError(f"states[{k}]: shape must be ({n_int + 1}, 7), got {xg.shape[::-1]}")
+        t0 = time.perf_counter()
+        sol = solver(x0=np.concatenate([xg.ravel(order="F"), ug.ravel(order="F")]), lbg=0, ubg=0)
+        wall = time.perf_counter() - t0
+        z = np.asarray(sol["x"]).ravel()
+        results.append(
+            {
+                "u": z[nx:].reshape(n_int, 3),
+                "x": z[:nx].reshape(n_int + 1, 7),
+                "fuel": float(sol["f"]),
+                "status": solver.stats()["return_status"],
+                "iterations": int(solver.stats()["iter_count"]),
+                "wall_s": wall,
+            }
+        )
+    return results
+
+
+def solve(prob: SlewProblem, u0: np.ndarray | None = None, *, tol: float = 1e-10) -> dict[str, Any]:
+    """IPOPT from one initial torque history ``u0 (N, 3)`` (zeros if None); see :func:`solve_many`."""
+    return solve_many(prob, [u0], tol=tol)[0]

@@ -21,12 +21,20 @@ from jaxsim.plants import orbital_station as st
 
 __all__ = [
     "SlewProblem",
-    "guidance",
-    "rollout",
     "fuel",
+    "fuel_kg",
+    "guidance",
+    "guidance_error",
+    "multi_start",
+    "rest_state_scaled",
+    "rollout",
+    "shoot",
     "smooth_abs",
+    "standard_slew_fuel_kg",
+    "standard_slew_history",
     "standard_slew_torque",
     "terminal_error",
+    "trajectory",
 ]
 
 
@@ -49,14 +57,15 @@ class SlewProblem:
         return jnp.array([jnp.cos(h), 0.0, 0.0, jnp.sin(h)])
 
     def x0(self) -> jax.Array:
-        return _scaled_rest(self.q0(), self)
+        return rest_state_scaled(self.q0(), self)
 
     def torque_scale(self) -> float:
         """N·m per unit of scaled torque."""
         return self.params.inertia[2] / self.horizon**2
 
 
-def _scaled_rest(q: jax.Array, prob: SlewProblem) -> jax.Array:
+def rest_state_scaled(q: jax.Array, prob: SlewProblem) -> jax.Array:
+    """Scaled state ``[q, Ω = ωT]`` (7,) at rest in the orbital frame at attitude ``q``."""
     x = st.rest_state(q, prob.params)
     return x.at[4:].multiply(prob.horizon)
 
@@ -89,18 +98,48 @@ def rollout(u: jax.Array, prob: SlewProblem) -> jax.Array:
     return jnp.concatenate([x0[None], xs])
 
 
+def trajectory(u: jax.Array, prob: SlewProblem, steps_per_interval: int) -> jax.Array:
+    """States ``(N·steps_per_interval + 1, 7)`` every ``1/(N·steps_per_interval)`` of scaled time under
+    the piecewise-constant torques ``u (N, 3)``: the same RK4 as :func:`rollout` on a finer grid (for
+    the dense attitude history the guidance law samples)."""
+    fine = SlewProblem(prob.params, prob.horizon, prob.yaw_deg, prob.n_intervals, steps_per_interval, prob.eps)
+    h = 1.0 / (prob.n_intervals * steps_per_interval)
+
+    def f(x: jax.Array, uk: jax.Array) -> jax.Array:
+        return st.scaled_rhs(x, uk, prob.params, prob.horizon)
+
+    def step(x: jax.Array, uk: jax.Array) -> tuple[jax.Array, jax.Array]:
+        k1 = f(x, uk)
+        k2 = f(x + 0.5 * h * k1, uk)
+        k3 = f(x + 0.5 * h * k2, uk)
+        k4 = f(x + h * k3, uk)
+        x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        return x, x
+
+    x0 = fine.x0()
+    _, xs = jax.lax.scan(step, x0, jnp.repeat(u, steps_per_interval, axis=0))
+    return jnp.concatenate([x0[None], xs])
+
+
 def terminal_error(x_end: jax.Array, prob: SlewProblem) -> jax.Array:
     """``[vec(q_f* ⊗ q_N), Ω_N − Ω_rest(q_f)]`` (6,)."""
     qf = prob.qf()
     conj = qf * jnp.array([1.0, -1.0, -1.0, -1.0])
     dq = st.quat_mul(conj, x_end[:4])
-    return jnp.concatenate([dq[1:], x_end[4:] - _scaled_rest(qf, prob)[4:]])
+    return jnp.concatenate([dq[1:], x_end[4:] - rest_state_scaled(qf, prob)[4:]])
 
 
 def fuel(u: jax.Array, prob: SlewProblem, eps: float | None = None) -> jax.Array:
     """Scaled fuel ``Σ s(ũ)·Δτ`` (``eps = 0``: the exact L1)."""
     e = prob.eps if eps is None else eps
     return jnp.sum(smooth_abs(u, e)) / prob.n_intervals if e > 0 else jnp.sum(jnp.abs(u)) / prob.n_intervals
+
+
+def fuel_kg(u: jax.Array, prob: SlewProblem) -> jax.Array:
+    """Propellant (kg) of scaled torques ``u (N, 3)``: the exact L1 ``∫Σ|u_i|dt`` in N·m·s through
+    :func:`jaxsim.plants.orbital_station.fuel_kg`."""
+    impulse = fuel(u, prob, 0.0) * prob.torque_scale() * prob.horizon
+    return st.fuel_kg(impulse, prob.params)
 
 
 def guidance(t: jax.Array, q_nodes: jax.Array, dt: float, n: float = 0.0) -> tuple[jax.Array, jax.Array]:
@@ -144,8 +183,41 @@ def standard_slew_torque(t: jax.Array, p: st.StationParams, duration: float, yaw
     return inertia * wdot + jnp.cross(w, inertia * w) - 3 * n * n * jnp.cross(c, inertia * c)
 
 
+def standard_slew_history(
+    p: st.StationParams, duration: float, yaw_deg: float = 180.0, samples: int = 6001
+) -> tuple[jax.Array, jax.Array]:
+    """Times ``(samples,)`` (s) over ``[0, duration]`` and :func:`standard_slew_torque` at them
+    ``(samples, 3)`` (N·m)."""
+    t = jnp.linspace(0.0, duration, samples)
+    return t, jax.vmap(lambda t: standard_slew_torque(t, p, duration, yaw_deg))(t)
+
+
+def standard_slew_fuel_kg(t: jax.Array, torque: jax.Array, p: st.StationParams) -> jax.Array:
+    """Propellant (kg) of a sampled torque history ``torque (M, 3)`` at times ``t (M,)``:
+    ``∫Σ|u_i|dt`` by the trapezoid rule (``|u_i|`` has kinks where a component changes sign; for the
+    standard slew 6001 points over 3000 s agree with 60001 to 1e-7 relative)."""
+    return st.fuel_kg(jnp.trapezoid(jnp.sum(jnp.abs(torque), axis=1), t), p)
+
+
+def guidance_error(states: jax.Array, dt_state: float, node_every: int, n: float) -> dict[str, jax.Array]:
+    """Worst error of the guidance law (1) against a dense attitude history: ``states (M, 7)`` SI
+    (quaternion, inertial body rate in rad/s) every ``dt_state`` s; nodes every ``node_every`` samples
+    (``Δt = node_every·dt_state``); the command at every sample against the state there.
+    Returns ``angle_rad`` (largest rotation between command and state) and ``rate_rad_s`` (largest
+    |ω_cmd − ω| over whole node intervals: the law's rate is constant on each)."""
+    q = states[:, :4] / jnp.linalg.norm(states[:, :4], axis=1, keepdims=True)  # RK4 drifts off |q| = 1
+    nodes = q[::node_every]
+    dt = node_every * dt_state
+    m = (nodes.shape[0] - 1) * node_every + 1
+    t = jnp.arange(m) * dt_state
+    q_cmd, w_cmd = jax.vmap(lambda t: guidance(t, nodes, dt, n))(t)
+    dots = jnp.abs(jnp.sum(q_cmd * q[:m], axis=1))
+    angle = 2.0 * jnp.arccos(jnp.clip(dots, 0.0, 1.0))
+    return {"angle_rad": jnp.max(angle), "rate_rad_s": jnp.max(jnp.linalg.norm(w_cmd - states[:m, 4:], axis=1))}
+
+
 def shoot(
-    u0: jax.Array, prob: SlewProblem, *, iters: int = 30, floor: float = 1e-3, max_step: float = 5.0
+    u0: jax.Array, prob: SlewProblem, *, iters: int = 200, floor: float = 1e-3, max_step: float = 1.0
 ) -> dict[str, jax.Array]:
     """SQP shooting from torques ``u0 (N, 3)``: each iteration solves the KKT system of the smoothed
     fuel with the terminal conditions linearised by forward-mode autodiff; the Hessian is the fuel's

@@ -74,6 +74,48 @@ def test_rollout_against_solve_ivp_and_terminal_error():
         np.testing.assert_allclose(xs[k + 1], x, rtol=1e-6, atol=1e-8)
     # a state at rest at ±q_f has zero terminal error
     for sign in (1.0, -1.0):
-        xf = ss._scaled_rest(sign * prob.qf(), prob)
+        xf = ss.rest_state_scaled(sign * prob.qf(), prob)
         np.testing.assert_allclose(ss.terminal_error(xf, prob), 0.0, atol=1e-12)
     assert float(ss.fuel(u, prob, 0.0)) == pytest.approx(np.abs(np.asarray(u)).sum() / 4)
+
+
+def test_trajectory_on_the_rollout_grid_equals_the_rollout():
+    prob = ss.SlewProblem(n_intervals=5, substeps=3)
+    u = jnp.asarray(np.random.default_rng(1).normal(0, 4, (5, 3)))
+    dense = ss.trajectory(u, prob, 3)
+    np.testing.assert_allclose(dense[::3], ss.rollout(u, prob), rtol=0, atol=1e-13)
+    assert dense.shape == (16, 7)
+
+
+def test_guidance_error_of_an_accelerating_single_axis_rotation_is_the_closed_form():
+    """θ(t) = a t²/2 about a fixed axis (no orbit rate): law (1) interpolates θ linearly between nodes,
+    so its largest attitude error is a Δt²/8 (mid-interval) and its rate error a Δt/2 (interval ends)."""
+    a, step, axis = 2e-4, 0.5, np.array([1.0, 2.0, -2.0]) / 3.0
+    t = np.arange(0, 120 + step / 2, step)
+    theta = a * t**2 / 2
+    q = np.concatenate([np.cos(theta / 2)[:, None], np.sin(theta / 2)[:, None] * axis], axis=1)
+    states = jnp.asarray(np.concatenate([q, (a * t)[:, None] * axis], axis=1))
+    for every in (4, 20):
+        dt = every * step
+        e = ss.guidance_error(states, step, every, 0.0)
+        assert float(e["angle_rad"]) == pytest.approx(a * dt**2 / 8, rel=1e-6)
+        assert float(e["rate_rad_s"]) == pytest.approx(a * dt / 2, rel=1e-9)
+    # a constant-rate rotation is followed exactly
+    q = np.concatenate([np.cos(0.01 * t / 2)[:, None], np.sin(0.01 * t / 2)[:, None] * axis], axis=1)
+    e = ss.guidance_error(jnp.asarray(np.concatenate([q, np.outer(np.full_like(t, 0.01), axis)], 1)), step, 10, 0.0)
+    assert float(e["angle_rad"]) < 1e-7 and float(e["rate_rad_s"]) < 1e-12
+
+
+def test_standard_slew_fuel_without_orbit_rate_is_the_closed_form():
+    """Cycloidal yaw without orbit rate: u = J_z ψ̈, so ∫|u| dt = J_z · 2 max ψ̇ = 4 J_z ψ_f / T."""
+    p, T = st.StationParams(orbit_rate=0.0), 3000.0
+    kg = float(ss.standard_slew_fuel_kg(*ss.standard_slew_history(p, T), p))
+    assert kg == pytest.approx(4 * p.inertia[2] * np.pi / T / (p.arm * p.isp * st.G0), rel=1e-6)
+
+
+def test_fuel_kg_of_scaled_torques():
+    prob = ss.SlewProblem(n_intervals=4)
+    u = jnp.zeros((4, 3)).at[:, 1].set(jnp.array([2.0, -2.0, 1.0, 0.0]))
+    impulse = 5.0 / 4 * prob.horizon * prob.params.inertia[2] / prob.horizon**2  # Σ|ũ|Δτ · T · J_z/T²
+    p = prob.params
+    assert float(ss.fuel_kg(u, prob)) == pytest.approx(impulse / (p.arm * p.isp * st.G0), rel=1e-14)

@@ -23,3 +23,9 @@ def test_ipopt_and_jax_shooting_agree_on_the_optimal_fuel():
     assert float(np.abs(s["error"]).max()) < 1e-9
     assert float(s["fuel"]) == pytest.approx(r["fuel"], rel=1e-8)
     np.testing.assert_allclose(np.asarray(s["u"]), r["u"], atol=1e-4)
+    # IPOPT warm-started at its own solution (torques and node states) stays there
+    (again,) = cs.solve_many(prob, [r["u"]], states=[r["x"]])
+    assert again["status"] == "Solve_Succeeded" and again["iterations"] <= 5
+    assert again["fuel"] == pytest.approx(r["fuel"], rel=1e-10)
+    with pytest.raises(ValueError, match="states"):
+        cs.solve_many(prob, [r["u"]], states=[r["x"][:-1]])
