@@ -17,6 +17,7 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
+from jaxsim.core.integrators import RK4
 from jaxsim.plants import orbital_station as st
 
 __all__ = [
@@ -76,47 +77,23 @@ def smooth_abs(v: jax.Array, eps: float) -> jax.Array:
 
 
 def rollout(u: jax.Array, prob: SlewProblem) -> jax.Array:
-    """States at the interval ends, ``(N + 1, 7)``, of scaled torques ``u (N, 3)`` (RK4)."""
-    h = 1.0 / (prob.n_intervals * prob.substeps)
-
-    def f(x: jax.Array, uk: jax.Array) -> jax.Array:
-        return st.scaled_rhs(x, uk, prob.params, prob.horizon)
-
-    def interval(x: jax.Array, uk: jax.Array) -> tuple[jax.Array, jax.Array]:
-        def step(x: jax.Array, _: Any) -> tuple[jax.Array, None]:
-            k1 = f(x, uk)
-            k2 = f(x + 0.5 * h * k1, uk)
-            k3 = f(x + 0.5 * h * k2, uk)
-            k4 = f(x + h * k3, uk)
-            return x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), None
-
-        x, _ = jax.lax.scan(step, x, None, length=prob.substeps)
-        return x, x
-
-    x0 = prob.x0()
-    _, xs = jax.lax.scan(interval, x0, u)
-    return jnp.concatenate([x0[None], xs])
+    """States at the interval ends, ``(N + 1, 7)``, of scaled torques ``u (N, 3)`` (``prob.substeps``
+    RK4 steps per interval)."""
+    return trajectory(u, prob, prob.substeps)[:: prob.substeps]
 
 
 def trajectory(u: jax.Array, prob: SlewProblem, steps_per_interval: int) -> jax.Array:
     """States ``(N·steps_per_interval + 1, 7)`` every ``1/(N·steps_per_interval)`` of scaled time under
-    the piecewise-constant torques ``u (N, 3)``: the same RK4 as :func:`rollout` on a finer grid (for
-    the dense attitude history the guidance law samples)."""
-    fine = SlewProblem(prob.params, prob.horizon, prob.yaw_deg, prob.n_intervals, steps_per_interval, prob.eps)
+    the piecewise-constant torques ``u (N, 3)``, by classical RK4 (:data:`jaxsim.core.integrators.RK4`);
+    with ``steps_per_interval = prob.substeps`` the discretisation of the optimal-control problem, finer
+    for the dense attitude history the guidance law samples."""
     h = 1.0 / (prob.n_intervals * steps_per_interval)
 
-    def f(x: jax.Array, uk: jax.Array) -> jax.Array:
-        return st.scaled_rhs(x, uk, prob.params, prob.horizon)
-
     def step(x: jax.Array, uk: jax.Array) -> tuple[jax.Array, jax.Array]:
-        k1 = f(x, uk)
-        k2 = f(x + 0.5 * h * k1, uk)
-        k3 = f(x + 0.5 * h * k2, uk)
-        k4 = f(x + h * k3, uk)
-        x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        x = RK4.step(lambda _t, x: st.scaled_rhs(x, uk, prob.params, prob.horizon), 0.0, x, h)
         return x, x
 
-    x0 = fine.x0()
+    x0 = prob.x0()
     _, xs = jax.lax.scan(step, x0, jnp.repeat(u, steps_per_interval, axis=0))
     return jnp.concatenate([x0[None], xs])
 

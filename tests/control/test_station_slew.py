@@ -79,12 +79,15 @@ def test_rollout_against_solve_ivp_and_terminal_error():
     assert float(ss.fuel(u, prob, 0.0)) == pytest.approx(np.abs(np.asarray(u)).sum() / 4)
 
 
-def test_trajectory_on_the_rollout_grid_equals_the_rollout():
+def test_trajectory_is_fourth_order_and_the_rollout_is_its_interval_ends():
     prob = ss.SlewProblem(n_intervals=5, substeps=3)
     u = jnp.asarray(np.random.default_rng(1).normal(0, 4, (5, 3)))
-    dense = ss.trajectory(u, prob, 3)
-    np.testing.assert_allclose(dense[::3], ss.rollout(u, prob), rtol=0, atol=1e-13)
-    assert dense.shape == (16, 7)
+    run = jax.jit(ss.trajectory, static_argnums=(1, 2))
+    ref = run(u, prob, 96)[-1]
+    errs = [float(jnp.max(jnp.abs(run(u, prob, k)[-1] - ref))) for k in (3, 6)]
+    assert 12 < errs[0] / errs[1] < 20  # RK4: halving the step divides the error by ≈ 16
+    np.testing.assert_allclose(ss.rollout(u, prob), run(u, prob, 3)[::3], rtol=1e-12, atol=1e-14)  # eager vs jit
+    assert run(u, prob, 3).shape == (16, 7)
 
 
 def test_guidance_error_of_an_accelerating_single_axis_rotation_is_the_closed_form():
