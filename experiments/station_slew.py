@@ -110,27 +110,6 @@ def ipopt_stage(cfg: Config, prob: ss.SlewProblem) -> stages.Stage:
     )
 
 
-def kkt_check(u: jax.Array, prob: ss.SlewProblem) -> dict[str, jax.Array]:
-    """First-order optimality of torques ``u (N, 3)`` in the JAX problem: the smoothed ``fuel``, the
-    largest terminal ``error`` of the JAX rollout, and the ``stationarity`` residual
-    ``‖∇f + Aᵀλ‖∞ / ‖∇f‖∞`` with ``λ`` the least-squares multipliers (``A``: the terminal conditions'
-    Jacobian by forward-mode autodiff)."""
-    shape = u.shape
-
-    def err(z: jax.Array) -> jax.Array:
-        return ss.terminal_error(ss.rollout(z.reshape(shape), prob)[-1], prob)
-
-    z = u.ravel()
-    g = jax.grad(lambda z: ss.fuel(z.reshape(shape), prob))(z)
-    a = jax.jacfwd(err)(z)
-    lam = jnp.linalg.lstsq(a.T, -g)[0]
-    return {
-        "fuel": ss.fuel(u, prob),
-        "error": jnp.max(jnp.abs(err(z))),
-        "stationarity": jnp.max(jnp.abs(g + a.T @ lam)) / jnp.max(jnp.abs(g)),
-    }
-
-
 def jax_stage(cfg: Config, prob: ss.SlewProblem, ipopt_minima: list[dict[str, Any]]) -> stages.Stage:
     """The vmapped JAX SQP from random starts, and the cross-checks: each IPOPT minimum is a KKT point
     of the JAX problem with the same cost, and IPOPT started at each JAX minimum returns it.  ``data``:
@@ -148,7 +127,7 @@ def jax_stage(cfg: Config, prob: ss.SlewProblem, ipopt_minima: list[dict[str, An
         {"start": k, "fuel_smoothed_scaled": float(f), "terminal_error": float(e), "converged": bool(c)}
         for k, (f, e, c) in enumerate(zip(fuel, err, conv))
     ]
-    kkt = jax.jit(jax.vmap(lambda u: kkt_check(u, prob)))(jnp.stack([jnp.asarray(r["u"]) for r in ipopt_minima]))
+    kkt = jax.jit(jax.vmap(lambda u: ss.kkt_residuals(u, prob)))(jnp.stack([jnp.asarray(r["u"]) for r in ipopt_minima]))
     kkt = {k: np.asarray(v) for k, v in kkt.items()}
     diffs = [abs(float(f) / r["fuel"] - 1) for f, r in zip(kkt["fuel"], ipopt_minima)]
     ok = np.flatnonzero(conv)

@@ -99,19 +99,21 @@ def solve_many(
     or, without ``states``, on the interpolation between the rest states.  Each result: ``u`` (N, 3),
     ``fuel`` (smoothed, scaled), ``x`` (N+1, 7), ``status``, ``iterations``, ``wall_s``."""
     n_int = prob.n_intervals
+    if states is not None:  # checked before the (seconds-long) NLP build
+        if len(states) != len(starts):
+            raise ValueError(f"states: need one (N+1, 7) array per start ({len(starts)}), got {len(states)}")
+        for k, x in enumerate(states):
+            if np.shape(x) != (n_int + 1, 7):
+                raise ValueError(f"states[{k}]: shape must be ({n_int + 1}, 7), got {np.shape(x)}")
     solver, x0, xf = _solver(prob, tol)
     s = np.linspace(0, 1, n_int + 1)[None]
     xg = (1 - s) * x0[:, None] + s * xf[:, None]
     nx = 7 * (n_int + 1)
     results = []
-    if states is not None and len(states) != len(starts):
-        raise ValueError(f"states: need one (N+1, 7) array per start ({len(starts)}), got {len(states)}")
     for k, u0 in enumerate(starts):
         ug = np.zeros((3, n_int)) if u0 is None else np.asarray(u0).T
         if states is not None:
             xg = np.asarray(states[k]).T
-            if xg.shape != (7, n_int + 1):
-                raise ValueError(f"states[{k}]: shape must be ({n_int + 1}, 7), got {xg.shape[::-1]}")
         t0 = time.perf_counter()
         sol = solver(x0=np.concatenate([xg.ravel(order="F"), ug.ravel(order="F")]), lbg=0, ubg=0)
         wall = time.perf_counter() - t0

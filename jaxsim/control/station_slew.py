@@ -12,7 +12,7 @@ starts by :func:`multi_start`; :mod:`optim.casadi_slew` is the same problem in C
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import jax
 import jax.numpy as jnp
@@ -26,6 +26,7 @@ __all__ = [
     "fuel_kg",
     "guidance",
     "guidance_error",
+    "kkt_residuals",
     "multi_start",
     "rest_state_scaled",
     "rollout",
@@ -193,6 +194,36 @@ def guidance_error(states: jax.Array, dt_state: float, node_every: int, n: float
     return {"angle_rad": jnp.max(angle), "rate_rad_s": jnp.max(jnp.linalg.norm(w_cmd - states[:m, 4:], axis=1))}
 
 
+def _flat_problem(
+    shape: tuple[int, ...], prob: SlewProblem
+) -> tuple[Callable[[jax.Array], jax.Array], Callable[[jax.Array], jax.Array]]:
+    """The smoothed fuel and the terminal error (6,) as functions of the flattened torques ``z``."""
+
+    def f(z: jax.Array) -> jax.Array:
+        return fuel(z.reshape(shape), prob)
+
+    def err(z: jax.Array) -> jax.Array:
+        return terminal_error(rollout(z.reshape(shape), prob)[-1], prob)
+
+    return f, err
+
+
+def kkt_residuals(u: jax.Array, prob: SlewProblem) -> dict[str, jax.Array]:
+    """First-order optimality of torques ``u (N, 3)``: the smoothed ``fuel``, the largest terminal
+    ``error``, and the ``stationarity`` residual ``‖∇f + Aᵀλ‖∞ / ‖∇f‖∞`` with ``λ`` the least-squares
+    multipliers (``A``: the terminal conditions' Jacobian by forward-mode autodiff) — e.g. to check a
+    solution found by another solver (:mod:`optim.casadi_slew`) in this problem."""
+    f, err = _flat_problem(u.shape, prob)
+    z = u.ravel()
+    g, a = jax.grad(f)(z), jax.jacfwd(err)(z)
+    lam = jnp.linalg.lstsq(a.T, -g)[0]
+    return {
+        "fuel": f(z),
+        "error": jnp.max(jnp.abs(err(z))),
+        "stationarity": jnp.max(jnp.abs(g + a.T @ lam)) / jnp.max(jnp.abs(g)),
+    }
+
+
 def shoot(
     u0: jax.Array, prob: SlewProblem, *, iters: int = 200, floor: float = 1e-3, max_step: float = 1.0
 ) -> dict[str, jax.Array]:
@@ -202,12 +233,7 @@ def shoot(
     linear, not quadratic; the step is capped at ``max_step`` (scaled torque, ∞-norm).
     Returns ``u``, smoothed ``fuel``, terminal ``error`` (6,)."""
     shape = u0.shape
-
-    def err(z: jax.Array) -> jax.Array:
-        return terminal_error(rollout(z.reshape(shape), prob)[-1], prob)
-
-    def f(z: jax.Array) -> jax.Array:
-        return fuel(z.reshape(shape), prob)
+    f, err = _flat_problem(shape, prob)
 
     def step(carry: tuple[jax.Array, jax.Array], _: Any) -> tuple[tuple[jax.Array, jax.Array], None]:
         z, lam = carry

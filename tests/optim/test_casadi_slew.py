@@ -23,6 +23,12 @@ def test_ipopt_and_jax_shooting_agree_on_the_optimal_fuel():
     assert float(np.abs(s["error"]).max()) < 1e-9
     assert float(s["fuel"]) == pytest.approx(r["fuel"], rel=1e-8)
     np.testing.assert_allclose(np.asarray(s["u"]), r["u"], atol=1e-4)
+    # IPOPT's optimum satisfies the JAX problem's first-order conditions; a perturbed point does not
+    kkt = jax.jit(lambda u: ss.kkt_residuals(u, prob))
+    at_opt, off_opt = kkt(jnp.asarray(r["u"])), kkt(jnp.asarray(r["u"]) + 0.01)
+    assert float(at_opt["stationarity"]) < 1e-6 and float(at_opt["error"]) < 1e-9
+    assert float(at_opt["fuel"]) == pytest.approx(r["fuel"], rel=1e-12)
+    assert float(off_opt["stationarity"]) > 1e-4
     # IPOPT warm-started at its own solution (torques and node states) stays there
     (again,) = cs.solve_many(prob, [r["u"]], states=[r["x"]])
     assert again["status"] == "Solve_Succeeded" and again["iterations"] <= 5
