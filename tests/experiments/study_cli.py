@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -23,3 +24,8 @@ def run_quick_study(name: str, out: Path, *extra: str, preset: str = "quick", ti
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     return json.loads((Path(out) / "results.json").read_text())
+
+
+def recorded_config(config) -> dict:
+    """A study's resolved ``config`` (a dataclass) as ``results.json`` records it: tuples become lists."""
+    return json.loads(json.dumps(dataclasses.asdict(config)))

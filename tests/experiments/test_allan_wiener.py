@@ -4,7 +4,6 @@ consistency, and the fitted coefficients against the generating ones."""
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
@@ -12,7 +11,7 @@ import pytest
 
 from experiments.allan_wiener import STUDY
 from jaxsim.inertial.sensor_errors import GyroNoise
-from tests.experiments.study_cli import run_quick_study
+from tests.experiments.study_cli import recorded_config, run_quick_study
 
 
 @pytest.fixture(scope="module")
@@ -24,7 +23,7 @@ def study_output(tmp_path_factory):
 def test_config_files_and_claims(study_output):
     out, res = study_output
     tiny = STUDY.resolve("tiny")[1]
-    assert res["preset"] == "tiny" and res["config"] == json_config(tiny)
+    assert res["preset"] == "tiny" and res["config"] == recorded_config(tiny)
     for name in ("wiener_avar.png", "gyro_avar.png", "wiener_avar.csv", "gyro_fit.csv", "reproduction.csv"):
         assert (out / name).stat().st_size > 0, name
     verdicts = {r["metric"]: r["verdict"] for r in res["reproduction"]}
@@ -34,10 +33,6 @@ def test_config_files_and_claims(study_output):
     for metric in ("mc_max_abs_z", "mc_to_continuous_M1", "wiener_fit_N2_over_bias_without_term"):
         assert verdicts[metric] == "reproduced", metric
     assert set(verdicts) >= {"fit_gradient_N_ratio", "fit_wls_Q_ratio"}
-
-
-def json_config(cfg):
-    return {k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(cfg).items()}
 
 
 def test_closed_form_and_monte_carlo_table_against_triangular_weights(study_output):

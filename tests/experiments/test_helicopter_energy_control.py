@@ -2,14 +2,12 @@
 the invariant claims' verdicts, and the hand design's reduced-model energy error against an independent
 SciPy (solve_ivp) integration of model (1)–(2) with laws (7)–(10) written in NumPy."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 import scipy.integrate
 
 from experiments.helicopter_energy_control import STUDY
-from tests.experiments.study_cli import run_quick_study
+from tests.experiments.study_cli import recorded_config, run_quick_study
 
 
 @pytest.fixture(scope="module")
@@ -21,7 +19,7 @@ def study_output(tmp_path_factory):
 def test_config_files_and_verdicts(study_output):
     out, res = study_output
     tiny = STUDY.resolve("tiny")[1]
-    cfg = {k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(tiny).items()}
+    cfg = recorded_config(tiny)
     assert res["config"] == cfg
     for name in ("designs.csv", "robustness.csv", "responses.png", "lyapunov.png"):
         assert (out / name).stat().st_size > 0, name

@@ -2,14 +2,12 @@
 pull-in table against the closed-form static condition (SciPy brentq), the multiple-scales numbers
 recomputed from their formulas, the design against the constraint vertex."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 import scipy.optimize
 
 from experiments.mems_accelerometer import STUDY
-from tests.experiments.study_cli import run_quick_study
+from tests.experiments.study_cli import recorded_config, run_quick_study
 
 
 @pytest.fixture(scope="module")
@@ -22,8 +20,7 @@ def test_config_files_and_verdicts(study_output):
     out, res = study_output
     tiny = STUDY.resolve("tiny")[1]
     assert res["preset"] == "tiny"
-    cfg = dataclasses.asdict(tiny)
-    assert res["config"] == {k: list(v) if isinstance(v, tuple) else v for k, v in cfg.items()}
+    assert res["config"] == recorded_config(tiny)
     for name in ("primary_peaks.csv", "sweeps.csv", "pull_in.csv", "frequency_response.png"):
         assert (out / name).stat().st_size > 0, name
     assert len(res["tables"]["sweeps"]) == tiny.n_omega * (2 * len(tiny.forces) + 2)

@@ -2,15 +2,13 @@
 claims' verdicts, the designs' bandwidths against a NumPy resolvent of the ZOH loop's linear model,
 the Monte-Carlo intervals around the linear noise prediction."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 
 from experiments.quartz_accelerometer import STUDY
 from jaxsim.control import force_rebalance as fr
 from jaxsim.plants import quartz_accelerometer as qa
-from tests.experiments.study_cli import run_quick_study
+from tests.experiments.study_cli import recorded_config, run_quick_study
 
 
 @pytest.fixture(scope="module")
@@ -22,7 +20,7 @@ def study_output(tmp_path_factory):
 def test_config_files_and_verdicts(study_output):
     out, res = study_output
     tiny = STUDY.resolve("tiny")[1]
-    cfg = {k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(tiny).items()}
+    cfg = recorded_config(tiny)
     assert res["config"] == cfg
     for name in ("designs.csv", "noise_vs_bits_rate.csv", "bandwidth.png", "noise_vs_bits.png", "comparison.csv"):
         assert (out / name).stat().st_size > 0, name

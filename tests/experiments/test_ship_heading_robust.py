@@ -1,15 +1,13 @@
 """Study ``ship_heading_robust`` (seed 004 #4) through the CLI, tiny preset: files and verdicts, the
 designs' phase margins against python-control, their closed-loop roots (NumPy) and max|T| (SciPy)."""
 
-import dataclasses
-
 import control
 import numpy as np
 import pytest
 import scipy.signal
 
 from experiments.ship_heading_robust import STUDY
-from tests.experiments.study_cli import run_quick_study
+from tests.experiments.study_cli import recorded_config, run_quick_study
 
 
 @pytest.fixture(scope="module")
@@ -21,7 +19,7 @@ def study_output(tmp_path_factory):
 def test_config_files_and_verdicts(study_output):
     out, res = study_output
     tiny = STUDY.resolve("tiny")[1]
-    cfg = {k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(tiny).items()}
+    cfg = recorded_config(tiny)
     assert res["config"] == cfg
     for name in ("designs.csv", "designs.png"):
         assert (out / name).stat().st_size > 0, name

@@ -2,8 +2,6 @@
 optimal torques it writes replayed through the SI plant by SciPy's ``solve_ivp`` — they must end the
 180° yaw at rest, and their L1 impulse must be the fuel the study reports."""
 
-import dataclasses
-
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -12,7 +10,7 @@ from scipy.integrate import solve_ivp
 
 from experiments.station_slew import STUDY
 from jaxsim.plants import orbital_station as st
-from tests.experiments.study_cli import run_quick_study
+from tests.experiments.study_cli import recorded_config, run_quick_study
 
 
 @pytest.fixture(scope="module")
@@ -24,7 +22,7 @@ def study_output(tmp_path_factory):
 def test_config_files_and_claims(study_output):
     out, res = study_output
     tiny = STUDY.resolve("tiny")[1]
-    cfg = {k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(tiny).items()}
+    cfg = recorded_config(tiny)
     assert res["config"] == cfg
     for name in ("ipopt_starts.csv", "fuel.csv", "guidance_law.csv", "torques.png", "attitude.png", "reproduction.csv"):
         assert (out / name).stat().st_size > 0, name

@@ -2,15 +2,13 @@
 level-hover defect against SciPy on the independent NumPy plant, the design's controllability, the
 claims' verdicts and the tuners' bookkeeping."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
 from experiments.tilt_rotor_failure import STUDY
 from tests.control.test_tilt_rotor import W, numpy_residual, scipy_trim
-from tests.experiments.study_cli import run_quick_study
+from tests.experiments.study_cli import recorded_config, run_quick_study
 
 
 @pytest.fixture(scope="module")
@@ -23,7 +21,7 @@ def test_config_files_and_claims(study_output):
     out, res = study_output
     tiny = STUDY.resolve("tiny")[1]
     assert res["preset"] == "tiny"
-    cfg = {k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(tiny).items()}
+    cfg = recorded_config(tiny)
     assert res["config"] == cfg
     for name in ("trim.csv", "comparison.csv", "robustness.csv", "reproduction.csv", "loss_vs_budget.png"):
         assert (out / name).stat().st_size > 0, name

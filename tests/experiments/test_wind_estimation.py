@@ -2,13 +2,11 @@
 sensors, the raw estimate's Monte-Carlo RMS against the sensor noise propagated by NumPy central
 differences, the maximum-likelihood turbulence against the generating values."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 
 from experiments.wind_estimation import STUDY, flight
-from tests.experiments.study_cli import run_quick_study
+from tests.experiments.study_cli import recorded_config, run_quick_study
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +28,7 @@ def numpy_wind(v_ground, h_dot, pitch, v_air, alpha):
 def test_config_files_and_claim(study_output):
     out, res = study_output
     tiny = STUDY.resolve("tiny")[1]
-    cfg = {k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(tiny).items()}
+    cfg = recorded_config(tiny)
     assert res["config"] == cfg
     for name in ("ideal_sensors.csv", "accuracy_vs_turbulence.csv", "accuracy_vs_turbulence.png", "reproduction.csv"):
         assert (out / name).stat().st_size > 0, name
