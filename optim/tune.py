@@ -158,15 +158,21 @@ class _Settings(NamedTuple):
     sims_per_eval: int
 
 
-def _make_objective(loss: Callable, reparam: Any, constraints: Callable | None, cfg: _Settings):
-    """``objective(u, lam) -> (J, (f, g, violation, merit))`` in unconstrained space."""
+def _make_objective(
+    loss: Callable, reparam: Any, constraints: Callable | None, cfg: _Settings, terms: Callable | None = None
+):
+    """``objective(u, lam) -> (J, (f, g, violation, merit))`` in unconstrained space; ``terms``
+    (``x -> (f, g)``), when given, replaces the separate ``loss`` and ``constraints`` calls."""
 
     def objective(u: Any, lam: jax.Array):
         x = apply(reparam, u)
-        f = jnp.asarray(loss(x))
+        f, g = terms(x) if terms is not None else (loss(x), None)
+        f = jnp.asarray(f)
         if f.shape != ():
             raise ValueError(f"loss: must return a scalar, got shape {f.shape}")
-        g = jnp.zeros((0,), f.dtype) if constraints is None else jnp.ravel(jnp.asarray(constraints(x), f.dtype))
+        if terms is None:
+            g = None if constraints is None else constraints(x)
+        g = jnp.zeros((0,), f.dtype) if g is None else jnp.ravel(jnp.asarray(g, f.dtype))
         pos = jnp.maximum(g, 0.0)
         merit = f + 0.5 * cfg.w * jnp.sum(pos**2)
         if cfg.al:
@@ -346,6 +352,7 @@ class _Resolved(NamedTuple):
     sims_per_eval: int
     penalty_weight: float
     name: str
+    terms: Callable | None = None  # params -> (loss, g) in one call (a Problem.from_terms problem)
 
 
 def _resolve(
@@ -364,6 +371,7 @@ def _resolve(
             pb.sims_per_eval if sims_per_eval is None else sims_per_eval,
             pb.penalty_weight if penalty_weight is None else penalty_weight,
             pb.name,
+            pb.loss_and_violation if constraints is None and pb.terms_fn is not None else None,
         )
     if not callable(loss):
         raise ValueError(f"loss: must be a Problem or callable, got {type(loss).__name__}")
@@ -506,7 +514,7 @@ def gradient_tuner(
         m_constraints = int(np.prod(g.shape))
 
     def build() -> dict:
-        objective = _make_objective(r.loss, r.reparam, r.constraints, cfg)
+        objective = _make_objective(r.loss, r.reparam, r.constraints, cfg, r.terms)
         # jitted, so the chunk's shape probe and its ``lax.cond`` share one trace of the step
         one = jax.jit(jax.vmap(_make_step(objective, opt, r.reparam, cfg)))
         return {
@@ -518,7 +526,9 @@ def gradient_tuner(
         }
 
     static = (cfg._replace(sims_per_eval=0), n_starts, m_constraints, steps_per_call, _u_avals(u_template))
-    key = key_or_none("tuner", callable_key(r.loss), opt, r.reparam, callable_key(r.constraints), static)
+    key = key_or_none(
+        "tuner", callable_key(r.loss), opt, r.reparam, callable_key(r.constraints), callable_key(r.terms), static
+    )
     built = _TUNERS.get_or_build(key, build)
 
     def init(params0: Any = None, key: jax.Array | None = None) -> TunerState:

@@ -119,13 +119,10 @@ class FuzzyPTuning:
         return f + 0.5 * self.setup.penalty_weight * jnp.sum(jnp.maximum(h, 0.0) ** 2)
 
     def problem(self, name: str, space: ParamSpace, char_of: Callable[[Any], Any], smooth: bool) -> Problem:
-        """Objective ``f`` and constraints ``h`` of the characteristic ``char_of(params)``."""
-        return Problem.from_loss(
-            name,
-            space,
-            lambda p, d, k: self.terms(char_of(p), smooth)[0],
-            constraints=lambda p: self.terms(char_of(p), smooth)[1],
-            penalty_weight=self.setup.penalty_weight,
+        """Objective ``f`` and constraints ``h`` of the characteristic ``char_of(params)``, from one
+        set of rollouts (:meth:`~jaxsim.problem.Problem.from_terms`)."""
+        return Problem.from_terms(
+            name, space, lambda p: self.terms(char_of(p), smooth)[:2], penalty_weight=self.setup.penalty_weight
         )
 
     def three_section_space(self) -> ParamSpace:

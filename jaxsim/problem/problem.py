@@ -91,6 +91,8 @@ class Problem:
     reduce: scenario totals ``(S,)`` → scalar (:func:`mean`, ``optim.worst_case``, ``optim.cvar``).
     loss_fn: ``(params, draw, key) -> scalar or Breakdown`` for problems whose loss is not a rollout.
     key: the fixed noise key.  penalty_weight: ``w`` of the constraint penalty.
+    terms_fn: ``params -> (loss, g)`` when the loss and the constraints come out of one computation
+        (:meth:`from_terms`): :meth:`loss_and_violation` then runs it once instead of twice.
     """
 
     name: str
@@ -105,6 +107,7 @@ class Problem:
     loss_fn: Callable[[Any, dict[str, Any], jax.Array], Any] | None = None
     key: Any = field(default_factory=lambda: jax.random.PRNGKey(0))
     penalty_weight: float = 100.0
+    terms_fn: Callable[[Any], tuple[jax.Array, jax.Array]] | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -134,6 +137,8 @@ class Problem:
             )
         if self.constraints is not None and not callable(self.constraints):
             raise ValueError("constraints: must be callable params -> g (feasible iff g ≤ 0) or None")
+        if self.terms_fn is not None and not callable(self.terms_fn):
+            raise ValueError("terms_fn: must be callable params -> (loss, g) or None")
         if not callable(self.reduce):
             raise ValueError("reduce: must be callable losses (S,) -> scalar")
         w = float(self.penalty_weight)
@@ -146,6 +151,26 @@ class Problem:
         """A problem whose loss is any function ``loss_fn(params, draw, key) -> scalar or Breakdown``
         (estimation studies, surrogates); the other fields as in the constructor."""
         return cls(name=name, space=space, loss_fn=loss_fn, **kwargs)
+
+    @classmethod
+    def from_terms(
+        cls, name: str, space: ParamSpace, terms_fn: Callable[[Any], tuple[jax.Array, jax.Array]], **kwargs: Any
+    ) -> "Problem":
+        """A problem whose loss and constraints come out of one computation (one simulation scores
+        the design and checks its limits): ``terms_fn(params) -> (loss scalar, g)``, feasible iff
+        ``g ≤ 0``.  The tuners and :meth:`penalised_loss` call it once per evaluation; a
+        :meth:`from_loss` problem with ``constraints`` calling the same simulation would run it twice
+        (XLA does not merge the two loops: twice the time and the compilation)."""
+        if not callable(terms_fn):
+            raise ValueError(f"terms_fn: must be callable params -> (loss, g), got {type(terms_fn).__name__}")
+        return cls(
+            name=name,
+            space=space,
+            loss_fn=lambda p, d, k: terms_fn(p)[0],
+            constraints=lambda p: terms_fn(p)[1],
+            terms_fn=terms_fn,
+            **kwargs,
+        )
 
     def replace(self, **changes: Any) -> "Problem":
         """A copy with fields changed (its jitted functions are compiled afresh)."""
@@ -252,12 +277,20 @@ class Problem:
             return jnp.zeros((0,))
         return jnp.ravel(jnp.asarray(self.constraints(params)))
 
+    def loss_and_violation(self, params: Any) -> tuple[jax.Array, jax.Array]:
+        """``(loss, g)`` with ``g`` flattened (``(0,)`` without constraints): one call of ``terms_fn``
+        for a :meth:`from_terms` problem without scenarios, else :meth:`loss` and :meth:`violation`."""
+        if self.terms_fn is not None and not self.scenarios:
+            f, g = self.terms_fn(params)
+            return jnp.asarray(f), jnp.ravel(jnp.asarray(g))
+        return self.loss(params), self.violation(params)
+
     def penalised_loss(self, params: Any) -> jax.Array:
         """``loss + (penalty_weight/2)·Σ max(0, g)²`` (what the swarm and the searches minimise)."""
-        f = self.loss(params)
         if self.constraints is None:
-            return f
-        return f + 0.5 * self.penalty_weight * jnp.sum(jnp.maximum(self.violation(params), 0.0) ** 2)
+            return self.loss(params)
+        f, g = self.loss_and_violation(params)
+        return f + 0.5 * self.penalty_weight * jnp.sum(jnp.maximum(g, 0.0) ** 2)
 
     def search_loss(self, z: jax.Array) -> jax.Array:
         """:meth:`penalised_loss` at the search-coordinate point ``z (d,)`` (PSO, grid, random search)."""

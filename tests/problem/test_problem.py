@@ -13,6 +13,7 @@ import jaxsim.montecarlo as mc
 from jaxsim.core import costs, metrics
 from jaxsim.montecarlo.kernel import run_one
 from jaxsim.problem import Param, ParamSpace, Problem, Scenario
+from optim import tune
 from optim.problems import PIDTuning
 
 TUNING = PIDTuning(t_final=1.0)
@@ -114,6 +115,38 @@ def test_from_loss_constraints_and_the_search_loss():
     assert pb.evaluate(space.init).terms.keys() == {"loss"}
     with pytest.raises(ValueError, match="made with from_loss"):
         pb.simulate(space.init)
+
+
+def _loops(fn, *args) -> int:
+    """Top-level scan/while loops in ``fn``'s jaxpr (one per simulation)."""
+    return sum(e.primitive.name in ("scan", "while") for e in jax.make_jaxpr(fn)(*args).jaxpr.eqns)
+
+
+def test_from_terms_simulates_once_for_loss_and_constraints_and_tunes_as_two_calls_do():
+    space = ParamSpace(gains=Param(lo=(0, 0, 0), hi=(20, 20, 2), init=(6, 4, 0.3)))
+    j0 = float(TUNING.loss(GAINS))
+
+    def terms(p):  # ISE + energy of one rollout; constraints: kd ≤ 0.25, loss ≤ 0.9 × its start
+        j = TUNING.loss(p["gains"])
+        return j, jnp.stack([p["gains"][2] - 0.25, j - 0.9 * j0])
+
+    joint = Problem.from_terms("pid_joint", space, terms, penalty_weight=50.0)
+    split = Problem.from_loss(
+        "pid_split", space, lambda p, d, k: terms(p)[0], constraints=lambda p: terms(p)[1], penalty_weight=50.0
+    )
+    x = space.init
+    f, g = joint.loss_and_violation(x)
+    np.testing.assert_allclose(f, split.loss(x), rtol=1e-14)
+    np.testing.assert_allclose(g, split.violation(x), rtol=1e-14)
+    np.testing.assert_allclose(joint.penalised_loss(x), split.penalised_loss(x), rtol=1e-14)
+    assert float(g[0]) == pytest.approx(0.05) and float(joint.penalised_loss(x)) > float(f)
+    assert _loops(joint.penalised_loss, x) == 1 and _loops(split.penalised_loss, x) == 2
+    kw = dict(steps=15, constraint_method="augmented_lagrangian", mode="forward")
+    a, b = tune(joint, **kw), tune(split, **kw)
+    np.testing.assert_allclose(a.params["gains"], b.params["gains"], rtol=1e-12)
+    assert a.loss == pytest.approx(b.loss, rel=1e-12) and a.constraint_violation == b.constraint_violation
+    with pytest.raises(ValueError, match="terms_fn: must be callable"):
+        Problem.from_terms("bad", space, 1.0)
 
 
 def test_jitted_functions_compile_once_per_problem(problem):
