@@ -200,3 +200,32 @@ def test_a_five_argument_controller_step_is_rejected_by_name():
     old = Controller(None, lambda p, r0, y0: (), lambda p, s, r, y, dt: (s, r - y), name="old_style")
     with pytest.raises(ValueError, match=r"controller 'old_style': step must accept \(params, state, r, y, dt, t\)"):
         simulate(ClosedLoop(PLANT, old, reference=Step(1.0)), jnp.zeros(2), Timing(t_final=0.1, dt=1e-2))
+
+
+def test_carry_promotion_keeps_values_and_starts_the_loop_carry_batched():
+    """``_promote_like``: eager calls return the carry itself; under vmap every float leaf comes out
+    batched (so the scan's batching fixed point settles in one round), integers stay as they were,
+    values unchanged, and no gradient flows into the anchor; the rollout equals itself without it."""
+    import jaxsim.core.rollout as rollout
+
+    carry = {"x": jnp.arange(3.0), "k": jnp.asarray(2), "none": None}
+    assert rollout._promote_like(carry, (jnp.ones(2),)) is carry
+    axes = {"x": 0, "k": None, "none": None}
+    for inputs in (jnp.arange(4.0), jax.random.split(jax.random.key(0), 4)):
+        out = jax.vmap(lambda i: rollout._promote_like(carry, i), out_axes=axes)(inputs)
+        np.testing.assert_array_equal(out["x"], np.tile(np.arange(3.0), (4, 1)))
+    with pytest.raises(ValueError, match="batched"):  # the float leaf is batched: out_axes None refused
+        jax.vmap(lambda i: rollout._promote_like(carry, i), out_axes=None)(jnp.arange(4.0))
+    assert float(jax.grad(lambda p: jnp.sum(rollout._promote_like(carry, p)["x"]) * p)(2.0)) == 3.0
+
+    timing = Timing(t_final=0.5, dt=1e-2)
+    gains = jnp.asarray([[0.9, 1.2, 0.05], [2.0, 0.5, 0.1]])
+    with_promotion = jax.jit(jax.vmap(jax.value_and_grad(lambda g: _itae(g, timing))))(gains)
+    original = rollout._promote_like
+    rollout._promote_like = lambda c, i: c
+    try:
+        without = jax.jit(jax.vmap(jax.value_and_grad(lambda g: _itae(g, timing))))(gains)
+    finally:
+        rollout._promote_like = original
+    for a, b in zip(with_promotion, without):
+        np.testing.assert_allclose(a, b, rtol=1e-13, atol=0)
