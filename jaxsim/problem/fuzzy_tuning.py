@@ -74,7 +74,7 @@ class FuzzyPTuning:
                 for g, f in setup.operating_points
             ]
         )
-        self.exact = jax.jit(lambda char: (self.penalised(char), self.terms(char, smooth=False)))
+        self.exact = jax.jit(self._exact)
         self.rollouts_jit = jax.jit(self.rollouts)
 
     def rollouts(self, char: Any) -> tuple[jax.Array, jax.Array, jax.Array]:
@@ -115,8 +115,12 @@ class FuzzyPTuning:
 
     def penalised(self, char: Any) -> jax.Array:
         """``J = f + (w/2)·Σ max(0, h)²`` with the exact characteristic and overshoot."""
-        f, h, _ = self.terms(char, smooth=False)
-        return f + 0.5 * self.setup.penalty_weight * jnp.sum(jnp.maximum(h, 0.0) ** 2)
+        return self._exact(char)[0]
+
+    def _exact(self, char: Any) -> tuple[jax.Array, tuple[jax.Array, jax.Array, dict[str, jax.Array]]]:
+        """``(J, (f, h, details))`` of the exact characteristic from one set of rollouts."""
+        f, h, details = self.terms(char, smooth=False)
+        return f + 0.5 * self.setup.penalty_weight * jnp.sum(jnp.maximum(h, 0.0) ** 2), (f, h, details)
 
     def problem(self, name: str, space: ParamSpace, char_of: Callable[[Any], Any], smooth: bool) -> Problem:
         """Objective ``f`` and constraints ``h`` of the characteristic ``char_of(params)``, from one
