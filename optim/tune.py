@@ -158,21 +158,16 @@ class _Settings(NamedTuple):
     sims_per_eval: int
 
 
-def _make_objective(
-    loss: Callable, reparam: Any, constraints: Callable | None, cfg: _Settings, terms: Callable | None = None
-):
-    """``objective(u, lam) -> (J, (f, g, violation, merit))`` in unconstrained space; ``terms``
-    (``x -> (f, g)``), when given, replaces the separate ``loss`` and ``constraints`` calls."""
+def _make_objective(terms: Callable, reparam: Any, cfg: _Settings):
+    """``objective(u, lam) -> (J, (f, g, violation, merit))`` in unconstrained space, from
+    ``terms(x) -> (f, g)`` (:func:`_joined`, or a Problem's ``loss_and_violation``)."""
 
     def objective(u: Any, lam: jax.Array):
-        x = apply(reparam, u)
-        f, g = terms(x) if terms is not None else (loss(x), None)
+        f, g = terms(apply(reparam, u))
         f = jnp.asarray(f)
         if f.shape != ():
             raise ValueError(f"loss: must return a scalar, got shape {f.shape}")
-        if terms is None:
-            g = None if constraints is None else constraints(x)
-        g = jnp.zeros((0,), f.dtype) if g is None else jnp.ravel(jnp.asarray(g, f.dtype))
+        g = jnp.ravel(jnp.asarray(g, f.dtype))
         pos = jnp.maximum(g, 0.0)
         merit = f + 0.5 * cfg.w * jnp.sum(pos**2)
         if cfg.al:
@@ -182,6 +177,11 @@ def _make_objective(
         return j, (f, g, jnp.sum(pos), merit)
 
     return objective
+
+
+def _joined(loss: Callable, constraints: Callable | None) -> Callable:
+    """``x -> (loss(x), g)`` with ``g = constraints(x)`` (empty without constraints)."""
+    return lambda x: (loss(x), jnp.zeros((0,)) if constraints is None else constraints(x))
 
 
 def _make_value_and_grad(objective: Callable, use_forward: bool):
@@ -352,7 +352,7 @@ class _Resolved(NamedTuple):
     sims_per_eval: int
     penalty_weight: float
     name: str
-    terms: Callable | None = None  # params -> (loss, g) in one call (a Problem.from_terms problem)
+    terms: Callable | None = None  # params -> (loss, g): a Problem's loss_and_violation (one call of terms_fn)
 
 
 def _resolve(
@@ -371,7 +371,7 @@ def _resolve(
             pb.sims_per_eval if sims_per_eval is None else sims_per_eval,
             pb.penalty_weight if penalty_weight is None else penalty_weight,
             pb.name,
-            pb.loss_and_violation if constraints is None and pb.terms_fn is not None else None,
+            pb.loss_and_violation if constraints is None else None,
         )
     if not callable(loss):
         raise ValueError(f"loss: must be a Problem or callable, got {type(loss).__name__}")
@@ -514,7 +514,8 @@ def gradient_tuner(
         m_constraints = int(np.prod(g.shape))
 
     def build() -> dict:
-        objective = _make_objective(r.loss, r.reparam, r.constraints, cfg, r.terms)
+        terms = r.terms if r.terms is not None else _joined(r.loss, r.constraints)
+        objective = _make_objective(terms, r.reparam, cfg)
         # jitted, so the chunk's shape probe and its ``lax.cond`` share one trace of the step
         one = jax.jit(jax.vmap(_make_step(objective, opt, r.reparam, cfg)))
         return {
