@@ -22,7 +22,8 @@ sliding-window LS + multi-rate Kalman prediction of a target point between camer
 003's vessel tracker: :mod:`~.window_selector` (α–β window bank + Sugeno window selector),
 :mod:`~.motion_models` (CV / coordinated turn, CV+CT IMM), :mod:`~.track_loss` (gate events and
 their soft surrogate); :mod:`~.wind` (seed 004 #11: wind from air data + INS and its Kalman model),
-:mod:`~.dc_prediction` (seed 004 #30: constrained prediction of GNSS differential corrections).
+:mod:`~.dc_prediction` (seed 004 #30: constrained prediction of GNSS differential corrections),
+:mod:`~.ekf_slam` (seed 004 B2: EKF-SLAM with state augmentation in static shapes).
 """
 
 from jaxsim.estimation.adapters import (
