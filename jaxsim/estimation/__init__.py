@@ -23,7 +23,9 @@ sliding-window LS + multi-rate Kalman prediction of a target point between camer
 :mod:`~.motion_models` (CV / coordinated turn, CV+CT IMM), :mod:`~.track_loss` (gate events and
 their soft surrogate); :mod:`~.wind` (seed 004 #11: wind from air data + INS and its Kalman model),
 :mod:`~.dc_prediction` (seed 004 #30: constrained prediction of GNSS differential corrections),
-:mod:`~.ekf_slam` (seed 004 B2: EKF-SLAM with state augmentation in static shapes).
+:mod:`~.ekf_slam` (seed 004 B2: EKF-SLAM with state augmentation in static shapes) and, for
+multi-object tracking (seed 000, paper 3), :mod:`~.association` (Gaussian scores, gate, greedy
+assignment) and :mod:`~.mot_metrics` (CLEAR MOT on the host).
 """
 
 from jaxsim.estimation.adapters import (

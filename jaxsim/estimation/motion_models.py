@@ -12,6 +12,8 @@ for CT; plots measure ``(x, y)``.
       S = sin(ω dt)/ω,        C = (1 − cos(ω dt))/ω
 
   written with ``sinc`` so that it is smooth (and equal to CV) at ``ω = 0``.
+* Constant acceleration (CA) per axis, state ``(L, V, a)``, white jerk of density ``q`` (m²/s⁵):
+  :func:`ca_axis_transition`, :func:`ca_axis_process_noise`; :func:`ca_planar` stacks two axes.
 * :func:`cv_ct_imm` — the two-model IMM (CV and CT, both on the 5-state so they can be mixed;
   the CV member keeps ω as a random walk it does not use) built from
   :func:`~jaxsim.estimation.imm.linear_member` and :func:`~jaxsim.estimation.imm.ekf_member`.
@@ -43,6 +45,31 @@ def cv_process_noise(dt: float, q: float) -> np.ndarray:
     check_positive("dt", dt)
     check_positive("q", q, allow_zero=True)
     return q * np.block([[dt**3 / 3 * np.eye(2), dt**2 / 2 * np.eye(2)], [dt**2 / 2 * np.eye(2), dt * np.eye(2)]])
+
+
+def ca_axis_transition(dt: float) -> np.ndarray:
+    """``F (3, 3)`` of one axis of the constant-acceleration (CA) model, state ``(L, V, a)`` (m, m/s, m/s²)."""
+    check_positive("dt", dt)
+    return np.array([[1.0, dt, dt**2 / 2], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
+
+
+def ca_axis_process_noise(dt: float, q: float) -> np.ndarray:
+    """``Q (3, 3)`` of one CA axis driven by white jerk of spectral density ``q`` (m²/s⁵)
+    (Bar-Shalom, Li & Kirubarajan §6.2.3)."""
+    check_positive("dt", dt)
+    check_positive("q", q, allow_zero=True)
+    return q * np.array(
+        [[dt**5 / 20, dt**4 / 8, dt**3 / 6], [dt**4 / 8, dt**3 / 3, dt**2 / 2], [dt**3 / 6, dt**2 / 2, dt]]
+    )
+
+
+def ca_planar(dt: float, q: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(F (6, 6), Q (6, 6), H (2, 6))`` of the planar CA model as two independent axes, state
+    ``(x, vx, ax, y, vy, ay)``, measuring ``(x, y)``; with a diagonal measurement covariance its Kalman
+    filter is the two per-axis filters side by side."""
+    eye = np.eye(2)
+    H = np.kron(eye, np.array([[1.0, 0.0, 0.0]]))
+    return np.kron(eye, ca_axis_transition(dt)), np.kron(eye, ca_axis_process_noise(dt, q)), H
 
 
 def ct_transition(dt: Any, x: jax.Array) -> jax.Array:
