@@ -143,7 +143,9 @@ def dead_reckoning_error_model(
         H=H,
         R=jnp.square(sigma_range) * jnp.eye(n_l),
         m0=jnp.zeros(4),
-        P0=jnp.diag(jnp.stack([jnp.square(sigma_pos0), jnp.square(sigma_pos0), jnp.square(sigma_dv), jnp.square(sigma_dk)])),
+        P0=jnp.diag(
+            jnp.stack([jnp.square(sigma_pos0), jnp.square(sigma_pos0), jnp.square(sigma_dv), jnp.square(sigma_dk)])
+        ),
     )
 
 
