@@ -525,8 +525,8 @@ def ml_vs_bank(cfg: Config, out: dict[str, np.ndarray]) -> stages.Stage:
     }
     rows = [{"tau_dk_s": tau, "bank_posterior": float(p)} for tau, p in zip(cfg.tau_dk_grid, w)]
     notes = [
-        "gradient ML (L-BFGS through the filter, %d steps, from τ = %.0f s) on the first draw: τ_K = %.0f s (|∂ℓ/∂ln τ| "
-        "%.1e); the bank's posterior mean of ln τ_K gives %.0f s (true %.0f s)"
+        "gradient ML (L-BFGS through the filter, %d steps, from τ = %.0f s) on the first draw: τ_K = %.0f s "
+        "(|∂ℓ/∂ln τ| %.1e); the bank's posterior mean of ln τ_K gives %.0f s (true %.0f s)"
         % (cfg.ml_steps, cfg.tau_dk_assumed, metrics["dr_ml_tau"], abs(grad), math.exp(bank_log), cfg.tau_dk)
     ]
     return stages.Stage(metrics=metrics, tables={"ml_vs_bank": rows}, notes=notes)
