@@ -350,6 +350,12 @@ def monte_carlo(cfg: Config, out: dict[str, np.ndarray], pos: dict[str, np.ndarr
     metrics["dr_nees_fraction_within_bounds"] = fraction_within(out["dr_nees"], 4)
     metrics["dr_nis_fraction_within_bounds"] = fraction_within(out["dr_nis"][:, fix], len(cfg.landmarks))
     metrics["rw_bank_nees_fraction_within_bounds"] = fraction_within(out["rw_bank_nees"], 2)
+    rw_nees_avg = out["rw_bank_nees"].mean(0)
+    over = np.nonzero(rw_nees_avg > chi2_bounds(2, cfg.runs)[1])[0]
+    metrics["rw_bank_nees_last_overconfident_step"] = float(over[-1]) if over.size else -1.0
+    metrics["rw_bank_nees_fraction_within_bounds_second_half"] = fraction_within(
+        out["rw_bank_nees"][:, cfg.rw_steps // 2 :], 2
+    )
     metrics["dr_bank_nees_fraction_within_bounds"] = fraction_within(out["dr_bank_nees"], 4)
     metrics["dr_stationary_nis_fraction_within_bounds"] = fraction_within(
         out["dr_stat_nis"][:, fix], len(cfg.landmarks)
@@ -418,13 +424,16 @@ def monte_carlo(cfg: Config, out: dict[str, np.ndarray], pos: dict[str, np.ndarr
 
     notes = [
         "consistency (fraction of steps whose %d-run average lies in the 95 %% χ² bounds): random walk NEES %.2f, NIS "
-        "%.2f, bank NEES %.2f; dead reckoning NEES %.2f, NIS %.2f (fix steps); bank NEES %.2f; wrong-τ filter NIS "
-        "%.2f, NEES against its own covariance %.2f, against the exact actual covariance %.2f"
+        "%.2f, bank NEES %.2f (%.2f over the second half; last over-confident step %d); dead reckoning NEES %.2f, "
+        "NIS %.2f (fix steps); bank NEES %.2f; wrong-τ filter NIS %.2f, NEES against its own covariance %.2f, "
+        "against the exact actual covariance %.2f"
         % (
             cfg.runs,
             metrics["rw_nees_fraction_within_bounds"],
             metrics["rw_nis_fraction_within_bounds"],
             metrics["rw_bank_nees_fraction_within_bounds"],
+            metrics["rw_bank_nees_fraction_within_bounds_second_half"],
+            metrics["rw_bank_nees_last_overconfident_step"],
             metrics["dr_nees_fraction_within_bounds"],
             metrics["dr_nis_fraction_within_bounds"],
             metrics["dr_bank_nees_fraction_within_bounds"],
