@@ -35,6 +35,7 @@ import numpy as np
 
 from jaxsim.estimation import kalman, linalg
 from jaxsim.estimation.lgssm import LinearGaussianSSM, at, step_params, validate_model
+from jaxsim.estimation.shared_gain import covariance_sequence
 
 
 def _check_positive(name: str, value: Any) -> None:
@@ -174,8 +175,9 @@ def mismatched_covariance(
         mask: ``(T,)`` or ``(T, p)`` availability of the measurements (default: all available).
         C: ``(n_f, n)`` map from the true state to what the filter estimates (default ``I``, needs ``n_f = n``).
 
-    The filter follows :func:`jaxsim.estimation.lgssm.kalman_filter` (update with ``y_0`` first, Joseph
-    form), so ``claimed`` equals its ``covs`` for the same mask.
+    The filter's gains and ``claimed`` covariances are
+    :func:`jaxsim.estimation.shared_gain.covariance_sequence`'s (``kalman_filter``'s: update with ``y_0``
+    first, Joseph form); only the joint second moment is new here.
     """
     validate_model(true, n_steps)
     validate_model(assumed, n_steps)
@@ -187,50 +189,37 @@ def mismatched_covariance(
     if C.shape != (nf, n):
         raise ValueError(f"C: expected shape ({nf}, {n}), got {tuple(C.shape)}")
     t = int(n_steps)
-    if mask is None:
-        m = jnp.ones((t, p), dtype=bool)
-    else:
-        mask = jnp.asarray(mask, bool)
-        if mask.shape not in ((t,), (t, p)):
-            raise ValueError(f"mask: expected shape ({t},) or ({t}, {p}), got {tuple(mask.shape)}")
-        m = jnp.broadcast_to(mask.reshape(t, -1), (t, p))
-    return _mismatch_scan(true, assumed, m, C)
+    if mask is not None and jnp.shape(mask) not in ((t,), (t, p)):
+        raise ValueError(f"mask: expected shape ({t},) or ({t}, {p}), got {tuple(jnp.shape(mask))}")
+    seq = covariance_sequence(assumed, t, mask=mask)  # the filter's gains and claimed covariances
+    actual = _actual_mse(true, assumed, seq.gains, C)
+    return MismatchResult(actual, seq.covs)
 
 
 @jax.jit
-def _mismatch_scan(true: LinearGaussianSSM, assumed: LinearGaussianSSM, m: jax.Array, C: jax.Array) -> MismatchResult:
+def _actual_mse(true: LinearGaussianSSM, assumed: LinearGaussianSSM, gains: jax.Array, C: jax.Array) -> jax.Array:
+    """Second moment of ``(x, x̂)`` through the filter's fixed gains ``(T, n_f, p)``; masked measurement
+    components have zero gain columns, so the raw ``H``, ``R`` of both models can be used."""
     n, nf = true.n_states, assumed.n_states
     m0 = jnp.concatenate([true.m0, assumed.m0])
     sigma0 = jnp.outer(m0, m0).at[:n, :n].add(true.P0)
     emap = jnp.concatenate([C, -jnp.eye(nf)], axis=1)  # e = C x − x̂
     mm = linalg.matmul
 
-    def step(carry, inp):
-        pf, sig = carry
-        m_t, tv_t, tv_f = inp
-        H, R = at(true, tv_t, "H"), at(true, tv_t, "R")
-        Hf, Rf = at(assumed, tv_f, "H"), at(assumed, tv_f, "R")
-        _, h_m, r_m = kalman.mask_measurement(jnp.zeros(Hf.shape[0]), Hf, Rf, m_t)
-        h_t = jnp.where(m_t[:, None], H, 0.0)
-        ph = mm(pf, h_m.T)
-        s = kalman.symmetrize(mm(h_m, ph) + r_m)
-        k = linalg.cho_solve(linalg.cholesky(s), ph.T).T
-        ikh = jnp.eye(nf) - mm(k, h_m)
-        pf_post = kalman.symmetrize(mm(mm(ikh, pf), ikh.T) + mm(mm(k, r_m), k.T))
-        a_u = jnp.block([[jnp.eye(n), jnp.zeros((n, nf))], [mm(k, h_t), ikh]])
+    def step(sig, inp):
+        k, tv_t, tv_f = inp
+        H, R, F, Q = (at(true, tv_t, name) for name in ("H", "R", "F", "Q"))
+        Hf, Ff = at(assumed, tv_f, "H"), at(assumed, tv_f, "F")
+        a_u = jnp.block([[jnp.eye(n), jnp.zeros((n, nf))], [mm(k, H), jnp.eye(nf) - mm(k, Hf)]])
         g = jnp.concatenate([jnp.zeros((n, k.shape[1])), k], axis=0)
         sig_post = kalman.symmetrize(mm(mm(a_u, sig), a_u.T) + mm(mm(g, R), g.T))
-        actual = kalman.symmetrize(mm(mm(emap, sig_post), emap.T))
-        F, Q = at(true, tv_t, "F"), at(true, tv_t, "Q")
-        Ff, Qf = at(assumed, tv_f, "F"), at(assumed, tv_f, "Q")
         big_f = jax.scipy.linalg.block_diag(F, Ff)
         big_q = jax.scipy.linalg.block_diag(Q, jnp.zeros((nf, nf)))
         sig_next = kalman.symmetrize(mm(mm(big_f, sig_post), big_f.T) + big_q)
-        pf_next = kalman.propagate_covariance(pf_post, Ff, Qf)
-        return (pf_next, sig_next), (actual, pf_post)
+        return sig_next, kalman.symmetrize(mm(mm(emap, sig_post), emap.T))
 
-    _, (actual, claimed) = jax.lax.scan(step, (assumed.P0, sigma0), (m, step_params(true), step_params(assumed)))
-    return MismatchResult(actual, claimed)
+    _, actual = jax.lax.scan(step, sigma0, (gains, step_params(true), step_params(assumed)))
+    return actual
 
 
 __all__ = [
