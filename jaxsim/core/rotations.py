@@ -16,6 +16,11 @@ import jax
 import jax.numpy as jnp
 
 
+def wrap_angle(a: jax.Array) -> jax.Array:
+    """Angle(s) wrapped to (−π, π] (rad); an angle already in range is returned unchanged (bit for bit)."""
+    return jnp.where((a > -jnp.pi) & (a <= jnp.pi), a, jnp.pi - jnp.mod(jnp.pi - a, 2.0 * jnp.pi))
+
+
 def skew(v: jax.Array) -> jax.Array:
     """Cross-product matrix ``S(v)`` with ``S(v) w = v × w``; ``v`` shape ``(3,)``."""
     x, y, z = v[0], v[1], v[2]

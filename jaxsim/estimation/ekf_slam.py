@@ -26,6 +26,7 @@ from typing import Callable, NamedTuple
 import jax
 import jax.numpy as jnp
 
+from jaxsim.core.rotations import wrap_angle
 from jaxsim.estimation import kalman
 from jaxsim.estimation.types import GaussianState
 
@@ -49,11 +50,6 @@ class LandmarkSensor:
     observe: Callable[[jax.Array, jax.Array], jax.Array]
     place: Callable[[jax.Array, jax.Array], jax.Array]
     residual: Callable[[jax.Array, jax.Array], jax.Array]
-
-
-def wrap_angle(a: jax.Array) -> jax.Array:
-    """Angle(s) wrapped to (−π, π] (rad); an angle already in range is returned unchanged (bit for bit)."""
-    return jnp.where((a > -jnp.pi) & (a <= jnp.pi), a, jnp.pi - jnp.mod(jnp.pi - a, 2.0 * jnp.pi))
 
 
 def _range_bearing(pose: jax.Array, landmark: jax.Array) -> jax.Array:
@@ -182,7 +178,6 @@ __all__ = [
     "SlamState",
     "LandmarkSensor",
     "RANGE_BEARING",
-    "wrap_angle",
     "unicycle",
     "slam_init",
     "slam_predict",
