@@ -80,8 +80,7 @@ PRESETS = {
         settle=15.0,
         turn_angle_deg=90.0,
         turn_duration=0.4,
-        gm_sequences=32,
-        gm_length=1200,
+        gm_sequences=128,
         nees_every=20,
     ),
 }
@@ -107,6 +106,8 @@ def tuning_of(cfg: Config) -> ahrs.MekfTuning:
         gm_tau=e.gyro_gm_tau,
         accel_bias=e.accel_bias,
         mag_bias=cfg.mag_residual_bias,
+        accel_scale=e.accel_scale,
+        mag_scale=cfg.mag_residual_scale,
         accel_sigma=cfg.accel_sigma,
         mag_sigma=cfg.mag_sigma,
         attitude0=cfg.attitude0_deg * DEG,
@@ -163,9 +164,11 @@ def one_run(cfg: Config, key: jax.Array) -> dict[str, jax.Array]:
 
     # after: calibrations (assumed residuals), then the MEKF
     kb, ks, kk = jax.random.split(k_cal, 3)
-    b_hat = consts.mag_bias + cfg.mag_residual_bias * jax.random.normal(kb, (3,))
-    s_hat = consts.mag_scale + cfg.mag_residual_scale * jax.random.normal(ks, (3,))
-    mag_cal = (meas["mag"] - b_hat) / (1.0 + s_hat)
+    # the calibration's output: (m − b̂)/(1 + ŝ) = (1 + δs) m_b + δb + noise, with the assumed residuals
+    # drawn directly (drawing b̂, ŝ around the 30 %-scale truth would divide by 1 + ŝ ≈ 0 in rare runs)
+    d_b = cfg.mag_residual_bias * jax.random.normal(kb, (3,))
+    d_s = cfg.mag_residual_scale * jax.random.normal(ks, (3,))
+    mag_cal = (meas["mag"] - consts.mag_bias) / (1.0 + consts.mag_scale) * (1.0 + d_s) + d_b
     k_hat = consts.gyro_temp_coeff * (1.0 + cfg.temp_coeff_residual * jax.random.normal(kk, (3,)))
     tau_t = 30.0  # s, low-pass of the indicated temperature
 
@@ -185,9 +188,7 @@ def one_run(cfg: Config, key: jax.Array) -> dict[str, jax.Array]:
     std = jnp.sqrt(jnp.sum(w[:, None] * (e_est - mean) ** 2, axis=0))
     q_true = jax.vmap(ahrs.quat_from_euler)(e_true)
     idx = jnp.arange(cfg.nees_every - 1, tt.shape[0], cfg.nees_every)
-    dth = quat_rotation_vector(
-        quat_mul(res.q[idx] * jnp.array([1.0, -1.0, -1.0, -1.0]), q_true[idx])
-    )  # R = R̂ exp(δθ)
+    dth = quat_rotation_vector(quat_mul(res.q[idx] * jnp.array([1.0, -1.0, -1.0, -1.0]), q_true[idx]))  # R = R̂ exp(δθ)
     nees = jnp.einsum("ni,nij,nj->n", dth, jnp.linalg.inv(res.P_att[idx]), dth)
     return {
         "drift_before": _slope(tt, e_raw),
@@ -336,8 +337,14 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         "calibration and temperature least squares are not given: replaced by assumed residuals (toml)",
         "the paper's after-biases (−0.041/0.056/0.158°) are one realisation: reported as the quantile of |bias| "
         "among our runs (reproduced if it is a plausible draw, 2.5–97.5 %)",
-        "the accelerometer bias (5 mg) is not calibrated by any of the paper's algorithms; its horizontal part is "
-        "indistinguishable from tilt in straight flight and sets the tilt bias",
+        "the accelerometer bias (5 mg) is not calibrated by any of the paper's algorithms; in a coordinated turn the "
+        "specific force stays along body z, so the body-frame tilt error it causes (≈ 0.3°) is unobservable, and as "
+        "the heading sweeps the magnetometer (inclination 70°, tan I ≈ 2.7) turns it into a heading error that "
+        "varies over the flight: this, not noise, sets our heading σ",
+        f"attitude NEES: run mean {metrics['nees_mean']:.2f} (3 dof), inside the χ² 95 % bounds "
+        f"[{lo:.2f}, {hi:.2f}] at {100 * metrics['nees_fraction_in_bounds']:.0f} % of the sampled times after "
+        "settling; consistent in straight flight, overconfident by about 1.5× after the turn (the EKF's "
+        "linearisation in the bilinear scale-factor states)",
     ]
 
     r0 = runs[0]

@@ -15,9 +15,10 @@ with ``g_k`` the first-order Gauss–Markov sequence of :func:`gauss_markov` (ex
 stationary start): ``g_{k+1} = e^{−dt/τ} g_k + σ√(1 − e^{−2dt/τ}) w_k``, autocovariance
 ``σ² e^{−|Δt|/τ}`` (:func:`gauss_markov_autocovariance`).
 
-The MEKF (:func:`mekf_run`) has 15 error states ``[δθ (3), c_g (3), g_g (3), b_a (3), b_m (3)]``:
+The MEKF (:func:`mekf_run`) has 21 error states ``[δθ, c_g, g_g, b_a, b_m, s_a, s_m]`` (3 each):
 the body-frame attitude error ``R = R̂ exp([δθ×])``, the constant gyro bias, its Gauss–Markov part,
-the accelerometer bias and the magnetometer residual bias.  It propagates with the gyro and updates
+the accelerometer bias, the magnetometer residual bias and the accelerometer and magnetometer
+(residual) scale factors.  It propagates with the gyro and updates
 with the gravity direction (accelerometer minus the air-data estimate of the linear acceleration
 ``a_b = ω × [V, 0, 0]``) and the full magnetometer vector; an update is skipped while the norm of its
 vector departs from ``g`` (or ``|m_N|``) by more than a gate (the paper's "correction limiting
@@ -38,6 +39,7 @@ from jaxsim.core.validation import check_positive, check_positive_int, check_sha
 DEG = jnp.pi / 180.0
 GRAVITY = 9.80665  # m/s²
 MG = 1e-3 * GRAVITY  # m/s² per milli-g
+NX = 21  # MEKF error states
 
 __all__ = [
     "AhrsErrors",
@@ -57,6 +59,8 @@ __all__ = [
     "mekf_run",
     "quat_from_euler",
     "specific_force_jacobian",
+    "body_rate",
+    "earth_field",
 ]
 
 
@@ -267,8 +271,8 @@ def corrupt(
         + gm
         + errors.gyro_white * jax.random.normal(kw, (n, 3))
     )
-    accel = (1.0 + consts.accel_scale) * truth["f"] + consts.accel_bias + errors.accel_white * jax.random.normal(
-        ka, (n, 3)
+    accel = (
+        (1.0 + consts.accel_scale) * truth["f"] + consts.accel_bias + errors.accel_white * jax.random.normal(ka, (n, 3))
     )
     Rs = jax.vmap(lambda x: rotation_from_quat(quat_from_euler(x)))(e)
     m_b = jnp.einsum("nji,j->ni", Rs, m_ned)
@@ -315,6 +319,8 @@ class MekfTuning:
     gm_tau: Any = 300.0
     accel_bias: Any = 5.0 * MG
     mag_bias: Any = 0.2
+    accel_scale: Any = 0.01
+    mag_scale: Any = 0.005
     accel_sigma: Any = 0.05
     mag_sigma: Any = 0.5
     attitude0: Any = 2.0 * DEG
@@ -323,9 +329,9 @@ class MekfTuning:
 
 
 class MekfResult(NamedTuple):
-    """``q (n, 4)`` attitude estimates, ``P (n, 15, 15)`` error covariances (only the attitude and gyro
-    blocks are kept: ``P_att (n, 3, 3)``), gyro bias estimate ``bias (n, 3)``, and the fractions of
-    accepted accelerometer / magnetometer updates."""
+    """``q (n, 4)`` attitude estimates, the attitude block ``P_att (n, 3, 3)`` of the error covariance,
+    the gyro bias estimate ``bias (n, 3)`` (constant + Gauss–Markov part) and the fractions of accepted
+    accelerometer / magnetometer updates."""
 
     q: jax.Array
     P_att: jax.Array
@@ -350,7 +356,7 @@ def mekf_run(
     dt: float,
     airspeed_tau: float = 10.0,
 ) -> MekfResult:
-    """Run the 15-state MEKF (module docstring) over gyro/accel/mag ``(n, 3)`` and ``airspeed (n,)``.
+    """Run the 21-state MEKF (module docstring) over gyro/accel/mag ``(n, 3)`` and ``airspeed (n,)``.
 
     ``airspeed`` is low-passed (first order, ``airspeed_tau`` s) before the linear-acceleration
     correction ``a_b = (ω_m − ĉ − ĝ) × [V̂, 0, 0]``.  Covariance updates in Joseph form."""
@@ -372,6 +378,8 @@ def mekf_run(
                 jnp.full(3, tun.gm_sigma**2),
                 jnp.full(3, tun.accel_bias**2),
                 jnp.full(3, tun.mag_bias**2),
+                jnp.full(3, tun.accel_scale**2),
+                jnp.full(3, tun.mag_scale**2),
             ]
         )
     )
@@ -381,24 +389,25 @@ def mekf_run(
                 jnp.full(3, (tun.gyro_white * dt) ** 2),
                 jnp.zeros(3),
                 jnp.full(3, tun.gm_sigma**2 * (1.0 - a_gm**2)),
-                jnp.zeros(6),
+                jnp.zeros(12),
             ]
         )
     )
     R_a = tun.accel_sigma**2 * I3
     R_m = tun.mag_sigma**2 * I3
+
     def update(x, P, y, h, H, R, ok):
         S = H @ P @ H.T + R
         nu = y - h - H @ x
         K = P @ H.T @ jnp.linalg.inv(S)
-        IKH = jnp.eye(15) - K @ H
+        IKH = jnp.eye(NX) - K @ H
         P_new = IKH @ P @ IKH.T + K @ R @ K.T
         x = jnp.where(ok, x + K @ nu, x)
         P = jnp.where(ok, P_new, P)
         return x, 0.5 * (P + P.T), ok
 
     def step(carry, inp):
-        q, c, g, ba, bm, P, v_hat = carry
+        q, c, g, ba, bm, sa, sm, P, v_hat = carry
         w_m, f_m, m_m, v_m = inp
         # propagate
         w = w_m - c - g
@@ -407,40 +416,41 @@ def mekf_run(
         q = q / jnp.linalg.norm(q)
         g = a_gm * g
         Phi_tt = rotation_from_quat(quat_exp(phi)).T
-        F = jnp.block(
-            [
-                [Phi_tt, -dt * I3, -dt * I3, Z3, Z3],
-                [Z3, I3, Z3, Z3, Z3],
-                [Z3, Z3, a_gm * I3, Z3, Z3],
-                [Z3, Z3, Z3, I3, Z3],
-                [Z3, Z3, Z3, Z3, I3],
-            ]
-        )
+        F = jnp.eye(NX).at[:3, :3].set(Phi_tt).at[:3, 3:9].set(jnp.concatenate([-dt * I3, -dt * I3], 1))
+        F = F.at[6:9, 6:9].set(a_gm * I3)
         P = F @ P @ F.T + Qd
         v_hat = v_hat + (dt / airspeed_tau) * (v_m - v_hat)
         # accelerometer: f_m − a_b = R̂ᵀ(−g) + b_a
         w = w_m - c - g
         a_b = jnp.cross(w, jnp.array([v_hat, 0.0, 0.0]))
         Rq = rotation_from_quat(q)
-        x = jnp.zeros(15)
+        x = jnp.zeros(NX)
         # the bias error also enters the air-data correction: a_b,true = â_b − (δc + δg) × v_b
         Sv = skew(jnp.array([v_hat, 0.0, 0.0]))
-        H_a = jnp.concatenate([specific_force_jacobian(q, -g_ned), Sv, Sv, I3, Z3], axis=1)
-        y_a = f_m - a_b
-        ok_a = jnp.abs(jnp.linalg.norm(y_a) - GRAVITY) <= tun.accel_gate
-        x, P, ok_a = update(x, P, y_a, Rq.T @ (-g_ned) + ba, H_a, R_a, ok_a)
-        H_m = jnp.concatenate([specific_force_jacobian(q, m_ned), Z3, Z3, Z3, I3], axis=1)
+        # f_m = (1 + s_a)∘(a_b + R̂ᵀ(−g)) + b_a
+        f_hat = a_b + Rq.T @ (-g_ned)
+        Da = jnp.diag(1.0 + sa)
+        H_a = jnp.concatenate(
+            [Da @ specific_force_jacobian(q, -g_ned), Da @ Sv, Da @ Sv, I3, Z3, jnp.diag(f_hat), Z3], axis=1
+        )
+        ok_a = jnp.abs(jnp.linalg.norm(f_m - a_b) - GRAVITY) <= tun.accel_gate
+        x, P, ok_a = update(x, P, f_m, (1.0 + sa) * f_hat + ba, H_a, R_a, ok_a)
+        # m_m = (1 + s_m)∘R̂ᵀm_N + b_m
+        m_hat = Rq.T @ m_ned
+        Dm = jnp.diag(1.0 + sm)
+        H_m = jnp.concatenate([Dm @ specific_force_jacobian(q, m_ned), Z3, Z3, Z3, I3, Z3, jnp.diag(m_hat)], axis=1)
         ok_m = jnp.abs(jnp.linalg.norm(m_m) - jnp.linalg.norm(m_ned)) <= tun.mag_gate
-        x, P, ok_m = update(x, P, m_m, Rq.T @ m_ned + bm, H_m, R_m, ok_m)
+        x, P, ok_m = update(x, P, m_m, (1.0 + sm) * m_hat + bm, H_m, R_m, ok_m)
         # reset
         q = quat_mul(q, quat_exp(x[:3]))
         q = q / jnp.linalg.norm(q)
         c, g, ba, bm = c + x[3:6], g + x[6:9], ba + x[9:12], bm + x[12:15]
-        G = jnp.eye(15).at[:3, :3].set(I3 - 0.5 * skew(x[:3]))
+        sa, sm = sa + x[15:18], sm + x[18:21]
+        G = jnp.eye(NX).at[:3, :3].set(I3 - 0.5 * skew(x[:3]))
         P = G @ P @ G.T
-        return (q, c, g, ba, bm, P, v_hat), (q, P[:3, :3], c + g, ok_a, ok_m)
+        return (q, c, g, ba, bm, sa, sm, P, v_hat), (q, P[:3, :3], c + g, ok_a, ok_m)
 
     z3 = jnp.zeros(3)
-    carry0 = (jnp.asarray(q0, float), z3, z3, z3, z3, P0, airspeed[0])
+    carry0 = (jnp.asarray(q0, float), z3, z3, z3, z3, z3, z3, P0, airspeed[0])
     _, (qs, Pa, bias, oka, okm) = jax.lax.scan(step, carry0, (gyro, accel, mag, airspeed))
     return MekfResult(qs, Pa, bias, jnp.mean(oka), jnp.mean(okm))
