@@ -61,6 +61,9 @@ __all__ = [
     "specific_force_jacobian",
     "body_rate",
     "earth_field",
+    "ComplementaryGains",
+    "ComplementaryResult",
+    "complementary_run",
 ]
 
 
@@ -454,3 +457,73 @@ def mekf_run(
     carry0 = (jnp.asarray(q0, float), z3, z3, z3, z3, z3, z3, P0, airspeed[0])
     _, (qs, Pa, bias, oka, okm) = jax.lax.scan(step, carry0, (gyro, accel, mag, airspeed))
     return MekfResult(qs, Pa, bias, jnp.mean(oka), jnp.mean(okm))
+
+
+# --- the complementary filter ---------------------------------------------------------------------
+
+
+@pytree_dataclass
+class ComplementaryGains:
+    """Gains of :func:`complementary_run`: crossover ``omega_c`` (rad/s) of the tilt (accelerometer)
+    and heading (magnetometer) loops, and the bias-integral gain ``k_i = ki_ratio·ω_c²`` (1/s²)."""
+
+    tilt_crossover: Any = 0.05
+    heading_crossover: Any = 0.05
+    ki_ratio: Any = 0.25
+    accel_gate: Any = 0.5
+
+
+class ComplementaryResult(NamedTuple):
+    """``q (n, 4)`` attitude estimates and the gyro bias estimate ``bias (n, 3)`` (rad/s)."""
+
+    q: jax.Array
+    bias: jax.Array
+
+
+def complementary_run(
+    gains: ComplementaryGains,
+    q0: jax.Array,
+    gyro: jax.Array,
+    accel: jax.Array,
+    mag: jax.Array,
+    airspeed: jax.Array,
+    dt: float,
+    airspeed_tau: float = 10.0,
+) -> ComplementaryResult:
+    """Explicit complementary filter (Mahony et al. 2008, "two position signals" of the paper) with
+    gyro-bias integral, the same air-data acceleration correction and correction limiting as
+    :func:`mekf_run`.  Tilt: ``ω_a = u_m × û`` with ``u_m = −(f_m − a_b)/|·|`` and ``û = R̂ᵀe_z``;
+    heading: ``ω_m = (ψ_mag − ψ̂)·R̂ᵀe_z`` (magnetometer levelled with the estimated tilt).  Then
+    ``ω̂ = ω_m − b̂ + ω_c,a ω_a + ω_c,m ω_m`` and ``ḃ = −k_i,a ω_a − k_i,m ω_m``."""
+    check_shape("q0", q0, (4,))
+    n = gyro.shape[0]
+    for name, arr in (("accel", accel), ("mag", mag)):
+        check_shape(name, arr, (n, 3))
+    check_shape("airspeed", airspeed, (n,))
+    check_positive("dt", dt)
+    e_z = jnp.array([0.0, 0.0, 1.0])
+    kpa, kpm = gains.tilt_crossover, gains.heading_crossover
+    kia, kim = gains.ki_ratio * kpa**2, gains.ki_ratio * kpm**2
+
+    def step(carry, inp):
+        q, b, v_hat = carry
+        w_m, f_m, m_m, v_m = inp
+        v_hat = v_hat + (dt / airspeed_tau) * (v_m - v_hat)
+        a_b = jnp.cross(w_m - b, jnp.array([v_hat, 0.0, 0.0]))
+        g_b = -(f_m - a_b)
+        ok = jnp.abs(jnp.linalg.norm(g_b) - GRAVITY) <= gains.accel_gate
+        R = rotation_from_quat(q)
+        u_hat = R.T @ e_z
+        w_a = jnp.where(ok, jnp.cross(g_b / jnp.linalg.norm(g_b), u_hat), 0.0)
+        e = euler_from_rotation(R)
+        dpsi = mag_heading(m_m, e[0], e[1]) - e[2]
+        w_h = jnp.arctan2(jnp.sin(dpsi), jnp.cos(dpsi)) * u_hat
+        w = w_m - b + kpa * w_a + kpm * w_h
+        b = b - dt * (kia * w_a + kim * w_h)
+        q = quat_mul(q, quat_exp(w * dt))
+        q = q / jnp.linalg.norm(q)
+        return (q, b, v_hat), (q, b)
+
+    carry0 = (jnp.asarray(q0, float), jnp.zeros(3), airspeed[0])
+    _, (qs, bs) = jax.lax.scan(step, carry0, (gyro, accel, mag, airspeed))
+    return ComplementaryResult(qs, bs)
