@@ -34,6 +34,7 @@ from typing import Any, Callable
 import jax
 import jax.numpy as jnp
 import numpy as np
+import optax
 
 from experiments import figures, stages
 from experiments.runner import Study, StudyResult, paper_facts
@@ -41,6 +42,7 @@ from jaxsim.core.rotations import quat_mul, quat_rotation_vector
 from jaxsim.estimation.gating import chi2_bounds
 from jaxsim.inertial import ahrs
 from jaxsim.inertial.attitude import propagate
+from jaxsim.problem import Param, ParamSpace, Problem
 
 CLAIMS, ASSUMPTIONS = paper_facts("orientation_system_accuracy")
 DEG = math.pi / 180.0
@@ -68,6 +70,9 @@ class Config:
     attitude0_deg: float = 2.0  # initial attitude error σ [assumed]
     cf_crossover: float = 0.05  # rad/s, complementary filter, tilt and heading loops [assumed]
     cf_ki_ratio: float = 0.25  # bias integral k_i = ratio·ω_c² [assumed]
+    tune_runs: int = 4  # flights in the tuning batch (independent of the Monte-Carlo flights)
+    tune_steps: int = 15  # Adam steps on (log ω_c, log k_i ratio)
+    tune_learning_rate: float = 0.2
     nees_every: int = 50  # NEES sampled every this many steps
     gm_sequences: int = 256  # Gauss–Markov identity check: sequences ...
     gm_length: int = 3000  # ... of this many 1-s samples
@@ -75,7 +80,7 @@ class Config:
 
 
 PRESETS = {
-    "quick": dict(duration=300.0, n_runs=12, settle=40.0, gm_sequences=128),
+    "quick": dict(duration=300.0, n_runs=12, settle=40.0, gm_sequences=128, tune_runs=3, tune_steps=10),
     "tiny": dict(
         duration=60.0,
         dt=0.05,
@@ -85,6 +90,8 @@ PRESETS = {
         turn_duration=0.4,
         gm_sequences=128,
         nees_every=20,
+        tune_runs=1,
+        tune_steps=2,
     ),
 }
 
@@ -141,9 +148,34 @@ def _unwrap(e: jax.Array) -> jax.Array:
     return jnp.concatenate([e[:1], e[:1] + jnp.cumsum(d, axis=0)])
 
 
+def cf_gains(cfg: Config, crossover: Any, ki_ratio: Any) -> ahrs.ComplementaryGains:
+    return ahrs.ComplementaryGains(
+        tilt_crossover=crossover, heading_crossover=crossover, ki_ratio=ki_ratio, accel_gate=cfg.accel_gate
+    )
+
+
+def cf_loss(cfg: Config, data: dict[str, jax.Array], crossover: Any, ki_ratio: Any) -> jax.Array:
+    """Mean over runs and kept times of the squared Euler-angle errors (deg²) of the complementary
+    filter on calibrated flight data ``data`` (a batch from :func:`flight_inputs`)."""
+
+    def one(d):
+        cf = ahrs.complementary_run(
+            cf_gains(cfg, crossover, ki_ratio), d["q0"], d["gyro"], d["accel"], d["mag"], d["airspeed"], cfg.dt
+        )
+        e = ahrs.euler_error(jax.vmap(ahrs.euler_from_quat)(cf.q), d["euler"]) / DEG
+        keep = d["t"] >= cfg.settle
+        return jnp.sum(keep[:, None] * e**2) / jnp.sum(keep)
+
+    return jnp.mean(jax.vmap(one)(data))
+
+
 @functools.partial(jax.jit, static_argnums=0)
-def one_run(cfg: Config, key: jax.Array) -> dict[str, jax.Array]:
-    """One Monte-Carlo flight: before/after statistics per angle (rad) and the sampled attitude NEES."""
+def flight_inputs(cfg: Config, key: jax.Array) -> dict[str, jax.Array]:
+    """The calibrated signals of one flight (inputs of both filters) and its true attitude."""
+    return _flight(cfg, key)["inputs"]
+
+
+def _flight(cfg: Config, key: jax.Array) -> dict[str, Any]:
     dt = cfg.dt
     t, tr, mid = truth(cfg, dt)
     errors = ahrs.AhrsErrors()
@@ -157,15 +189,7 @@ def one_run(cfg: Config, key: jax.Array) -> dict[str, jax.Array]:
     q_true0 = ahrs.quat_from_euler(tr["euler"][0])
     tt = t[1:]
 
-    # before: raw gyro integration from the true initial attitude; raw accelerometer tilt and
-    # magnetometer heading (no calibration, no acceleration correction)
-    q_raw = propagate(q_true0, meas["gyro"] * dt)
-    e_raw = _unwrap(ahrs.euler_error(jax.vmap(ahrs.euler_from_quat)(q_raw), e_true))
-    tilt = ahrs.accel_tilt(meas["accel"])
-    heading = ahrs.mag_heading(meas["mag"], tilt[:, 0], tilt[:, 1])
-    e_pos = ahrs.euler_error(jnp.concatenate([tilt, heading[:, None]], axis=1), e_true)
-
-    # after: calibrations (assumed residuals), then the MEKF
+    # calibrations (assumed residuals)
     kb, ks, kk = jax.random.split(k_cal, 3)
     # the calibration's output: (m − b̂)/(1 + ŝ) = (1 + δs) m_b + δb + noise, with the assumed residuals
     # drawn directly (drawing b̂, ŝ around the 30 %-scale truth would divide by 1 + ŝ ≈ 0 in rare runs)
@@ -183,6 +207,36 @@ def one_run(cfg: Config, key: jax.Array) -> dict[str, jax.Array]:
     gyro_cal = meas["gyro"] - k_hat * (temp_f - temp_f[0])[:, None]
     tun = tuning_of(cfg)
     q0 = quat_mul(q_true0, ahrs.quat_exp(tun.attitude0 * jax.random.normal(k_0, (3,))))
+    inputs = {
+        "q0": q0,
+        "gyro": gyro_cal,
+        "accel": meas["accel"],
+        "mag": mag_cal,
+        "airspeed": meas["airspeed"],
+        "euler": e_true,
+        "t": tt,
+    }
+    return {"inputs": inputs, "meas": meas, "consts": consts, "q_true0": q_true0}
+
+
+@functools.partial(jax.jit, static_argnums=0)
+def one_run(cfg: Config, key: jax.Array, cf_crossover: Any, cf_ki_ratio: Any) -> dict[str, jax.Array]:
+    """One Monte-Carlo flight: before/after statistics per angle (rad) and the sampled attitude NEES."""
+    dt = cfg.dt
+    fl = _flight(cfg, key)
+    meas, consts, q_true0, inp = fl["meas"], fl["consts"], fl["q_true0"], fl["inputs"]
+    e_true, tt, q0, gyro_cal, mag_cal = inp["euler"], inp["t"], inp["q0"], inp["gyro"], inp["mag"]
+    m_ned = ahrs.earth_field()
+    tun = tuning_of(cfg)
+    # before: raw gyro integration from the true initial attitude; raw accelerometer tilt and
+    # magnetometer heading (no calibration, no acceleration correction)
+    q_raw = propagate(q_true0, meas["gyro"] * dt)
+    e_raw = _unwrap(ahrs.euler_error(jax.vmap(ahrs.euler_from_quat)(q_raw), e_true))
+    tilt = ahrs.accel_tilt(meas["accel"])
+    heading = ahrs.mag_heading(meas["mag"], tilt[:, 0], tilt[:, 1])
+    e_pos = ahrs.euler_error(jnp.concatenate([tilt, heading[:, None]], axis=1), e_true)
+
+    # after: the MEKF
     res = ahrs.mekf_run(tun, q0, gyro_cal, meas["accel"], mag_cal, meas["airspeed"], m_ned, dt)
     e_est = ahrs.euler_error(jax.vmap(ahrs.euler_from_quat)(res.q), e_true)
     keep = tt >= cfg.settle
@@ -190,13 +244,9 @@ def one_run(cfg: Config, key: jax.Array) -> dict[str, jax.Array]:
     mean = jnp.sum(w[:, None] * e_est, axis=0)
     std = jnp.sqrt(jnp.sum(w[:, None] * (e_est - mean) ** 2, axis=0))
     # the complementary filter on the same calibrated signals
-    gains = ahrs.ComplementaryGains(
-        tilt_crossover=cfg.cf_crossover,
-        heading_crossover=cfg.cf_crossover,
-        ki_ratio=cfg.cf_ki_ratio,
-        accel_gate=cfg.accel_gate,
+    cf = ahrs.complementary_run(
+        cf_gains(cfg, cf_crossover, cf_ki_ratio), q0, gyro_cal, meas["accel"], mag_cal, meas["airspeed"], dt
     )
-    cf = ahrs.complementary_run(gains, q0, gyro_cal, meas["accel"], mag_cal, meas["airspeed"], dt)
     e_cf = ahrs.euler_error(jax.vmap(ahrs.euler_from_quat)(cf.q), e_true)
     mean_cf = jnp.sum(w[:, None] * e_cf, axis=0)
     std_cf = jnp.sqrt(jnp.sum(w[:, None] * (e_cf - mean_cf) ** 2, axis=0))
@@ -288,8 +338,18 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     metrics, gm_rows = gm_identity(cfg)
     metrics |= attitude_update_check(cfg)
 
+    tuning = tune_complementary(cfg, progress)
+    xo, kr = (float(tuning.result.params[k]) for k in ("crossover", "ki_ratio"))
+    metrics |= {
+        "cf_crossover_tuned": xo,
+        "cf_ki_ratio_tuned": kr,
+        "cf_tune_loss_start": float(tuning.tables["cf_tuning"][0]["loss"]),
+        "cf_tune_loss_end": float(tuning.result.loss),
+    }
     keys = jax.random.split(jax.random.PRNGKey(cfg.seed), cfg.n_runs)
-    runs = [{k: np.asarray(v) for k, v in one_run(cfg, k).items()} for k in progress(list(keys), desc="flights")]
+    runs = [
+        {k: np.asarray(v) for k, v in one_run(cfg, k, xo, kr).items()} for k in progress(list(keys), desc="flights")
+    ]
     st = {k: np.stack([r[k] for r in runs]) for k in runs[0]}
 
     run_rows = []
@@ -359,7 +419,10 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         f"after: MEKF σ {metrics['after_sigma_pitch_deg']:.3f}/{metrics['after_sigma_roll_deg']:.3f}/"
         f"{metrics['after_sigma_heading_deg']:.3f}° (paper 0.115/0.115/0.0551°); the paper's TAMCAL magnetometer "
         "calibration and temperature least squares are not given: replaced by assumed residuals (toml)",
-        f"complementary filter (crossover {cfg.cf_crossover} rad/s, same inputs): σ "
+        f"complementary filter, crossover and bias-integral ratio tuned by gradient (Adam, {cfg.tune_steps} steps, "
+        f"{cfg.tune_runs} tuning flights; mean squared error {metrics['cf_tune_loss_start']:.3g} → "
+        f"{metrics['cf_tune_loss_end']:.3g} deg²): ω_c = {xo:.3g} rad/s, k_i = {kr:.3g}·ω_c²; on the Monte-Carlo "
+        "flights σ "
         f"{metrics['cf_sigma_pitch_deg']:.3f}/{metrics['cf_sigma_roll_deg']:.3f}/{metrics['cf_sigma_heading_deg']:.3f}°"
         " (pitch/roll/heading); it has no covariance, so no NEES (the consistency check applies to the MEKF)",
         "the paper's after-biases (−0.041/0.056/0.158°) are one realisation: reported as the quantile of |bias| "
@@ -417,7 +480,34 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         tables={"gauss_markov": gm_rows, "runs": run_rows, "nees": nees_rows},
         figures={"errors": fig, "flight": fig_truth},
     )
-    return stages.merge(own, metrics=metrics, notes=notes)
+    return stages.merge(own, tuning, metrics=metrics, notes=notes)
+
+
+def cf_problem(cfg: Config) -> Problem:
+    """Tuning of the complementary filter's crossover and bias-integral ratio (log-scaled box) on a
+    batch of ``tune_runs`` flights drawn apart from the Monte-Carlo ones."""
+    keys = jax.random.split(jax.random.PRNGKey(cfg.seed + 7), cfg.tune_runs)
+    data = jax.vmap(lambda k: flight_inputs(cfg, k))(keys)
+    space = ParamSpace(
+        crossover=Param(lo=0.005, hi=2.0, init=cfg.cf_crossover, log=True),
+        ki_ratio=Param(lo=0.005, hi=5.0, init=cfg.cf_ki_ratio, log=True),
+    )
+    return Problem.from_loss(
+        "complementary_crossover", space, lambda p, _d, _k: cf_loss(cfg, data, p["crossover"], p["ki_ratio"])
+    )
+
+
+def tune_complementary(cfg: Config, progress: Callable[..., Any]) -> stages.TuningStage:
+    return stages.gradient_tuning(
+        cf_problem(cfg),
+        steps=cfg.tune_steps,
+        optimizer=optax.adam(cfg.tune_learning_rate),
+        progress=progress,
+        loss_label="mean squared attitude error, deg²",
+        table="cf_tuning",
+        figure="cf_tuning",
+        mode="forward",
+    )
 
 
 STUDY = Study(
