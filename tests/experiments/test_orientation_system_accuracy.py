@@ -23,7 +23,15 @@ def test_config_files_and_verdicts(result):
     out, res = result
     _, tiny = STUDY.resolve("tiny")
     assert res["preset"] == "tiny" and res["config"]["n_runs"] == tiny.n_runs == 3
-    for name in ("gauss_markov.csv", "runs.csv", "nees.csv", "errors.png", "flight.png", "reproduction.csv"):
+    for name in (
+        "gauss_markov.csv",
+        "runs.csv",
+        "nees.csv",
+        "errors.png",
+        "flight.png",
+        "cf_tuning.csv",
+        "reproduction.csv",
+    ):
         assert (out / name).exists(), name
     m = res["metrics"]
     for row in res["reproduction"]:
@@ -65,5 +73,9 @@ def test_statistics_recomputed_from_runs(result):
     # the fusion beats the raw sensors by orders of magnitude
     for a in ("roll", "heading"):
         assert m[f"after_sigma_{a}_deg"] < 0.1 * m[f"before_sigma_{a}_deg"]
+    hist = res["tables"]["cf_tuning"]
+    assert [r["step"] for r in hist] == list(range(len(hist))) and len(hist) >= res["config"]["tune_steps"]
+    assert hist[0]["crossover"] == pytest.approx(res["config"]["cf_crossover"], rel=1e-9)
+    assert m["cf_tune_loss_end"] <= m["cf_tune_loss_start"]
     nees = res["tables"]["nees"]
     assert all(r["bound_low"] < 3.0 < r["bound_high"] for r in nees)
