@@ -15,10 +15,12 @@ with ``g_k`` the first-order Gauss–Markov sequence of :func:`gauss_markov` (ex
 stationary start): ``g_{k+1} = e^{−dt/τ} g_k + σ√(1 − e^{−2dt/τ}) w_k``, autocovariance
 ``σ² e^{−|Δt|/τ}`` (:func:`gauss_markov_autocovariance`).
 
-The MEKF (:func:`mekf_run`) has 21 error states ``[δθ, c_g, g_g, b_a, b_m, s_a, s_m]`` (3 each):
-the body-frame attitude error ``R = R̂ exp([δθ×])``, the constant gyro bias, its Gauss–Markov part,
-the accelerometer bias, the magnetometer residual bias and the accelerometer and magnetometer
-(residual) scale factors.  It propagates with the gyro and updates
+The MEKF (:func:`mekf_run`) has 22 error states ``[δθ, c_g, g_g, b_a, b_m, s_a, s_m]`` (3 each)
+and ``δV``: the body-frame attitude error ``R = R̂ exp([δθ×])``, the constant gyro bias, its
+Gauss–Markov part, the accelerometer bias, the magnetometer residual bias, the accelerometer and
+magnetometer (residual) scale factors, and the error of the low-passed airspeed (Gauss–Markov with the
+low-pass time constant; without it the slowly varying airspeed error times the turn rate biases the
+tilt and the filter is overconfident in turns).  It propagates with the gyro and updates
 with the gravity direction (accelerometer minus the air-data estimate of the linear acceleration
 ``a_b = ω × [V, 0, 0]``) and the full magnetometer vector; an update is skipped while the norm of its
 vector departs from ``g`` (or ``|m_N|``) by more than a gate (the paper's "correction limiting
@@ -39,7 +41,7 @@ from jaxsim.core.validation import check_positive, check_positive_int, check_sha
 DEG = jnp.pi / 180.0
 GRAVITY = 9.80665  # m/s²
 MG = 1e-3 * GRAVITY  # m/s² per milli-g
-NX = 21  # MEKF error states
+NX = 22  # MEKF error states
 
 __all__ = [
     "AhrsErrors",
@@ -327,6 +329,7 @@ class MekfTuning:
     accel_sigma: Any = 0.05
     mag_sigma: Any = 0.5
     attitude0: Any = 2.0 * DEG
+    airspeed_sigma: Any = 0.3  # m/s, σ of the low-passed airspeed error (noise and √ bias)
     accel_gate: Any = 0.5  # m/s²: no accelerometer correction while | |f − a_b| − g | exceeds it
     mag_gate: Any = 3.0  # µT: no magnetometer correction while | |m| − |m_N| | exceeds it
 
@@ -359,7 +362,7 @@ def mekf_run(
     dt: float,
     airspeed_tau: float = 10.0,
 ) -> MekfResult:
-    """Run the 21-state MEKF (module docstring) over gyro/accel/mag ``(n, 3)`` and ``airspeed (n,)``.
+    """Run the 22-state MEKF (module docstring) over gyro/accel/mag ``(n, 3)`` and ``airspeed (n,)``.
 
     ``airspeed`` is low-passed (first order, ``airspeed_tau`` s) before the linear-acceleration
     correction ``a_b = (ω_m − ĉ − ĝ) × [V̂, 0, 0]``.  Covariance updates in Joseph form."""
@@ -370,6 +373,7 @@ def mekf_run(
     check_shape("airspeed", airspeed, (n,))
     check_positive("dt", dt)
     a_gm = jnp.exp(-dt / tun.gm_tau)
+    a_v = jnp.exp(-dt / airspeed_tau)
     g_ned = jnp.array([0.0, 0.0, GRAVITY])
     I3 = jnp.eye(3)
     Z3 = jnp.zeros((3, 3))
@@ -383,6 +387,7 @@ def mekf_run(
                 jnp.full(3, tun.mag_bias**2),
                 jnp.full(3, tun.accel_scale**2),
                 jnp.full(3, tun.mag_scale**2),
+                jnp.full(1, tun.airspeed_sigma**2),
             ]
         )
     )
@@ -393,6 +398,7 @@ def mekf_run(
                 jnp.zeros(3),
                 jnp.full(3, tun.gm_sigma**2 * (1.0 - a_gm**2)),
                 jnp.zeros(12),
+                jnp.full(1, tun.airspeed_sigma**2 * (1.0 - a_v**2)),
             ]
         )
     )
@@ -410,7 +416,7 @@ def mekf_run(
         return x, 0.5 * (P + P.T), ok
 
     def step(carry, inp):
-        q, c, g, ba, bm, sa, sm, P, v_hat = carry
+        q, c, g, ba, bm, sa, sm, dv, P, v_hat = carry
         w_m, f_m, m_m, v_m = inp
         # propagate
         w = w_m - c - g
@@ -420,41 +426,54 @@ def mekf_run(
         g = a_gm * g
         Phi_tt = rotation_from_quat(quat_exp(phi)).T
         F = jnp.eye(NX).at[:3, :3].set(Phi_tt).at[:3, 3:9].set(jnp.concatenate([-dt * I3, -dt * I3], 1))
-        F = F.at[6:9, 6:9].set(a_gm * I3)
+        F = F.at[6:9, 6:9].set(a_gm * I3).at[21, 21].set(a_v)
+        dv = a_v * dv
         P = F @ P @ F.T + Qd
         v_hat = v_hat + (dt / airspeed_tau) * (v_m - v_hat)
         # accelerometer: f_m − a_b = R̂ᵀ(−g) + b_a
         w = w_m - c - g
-        a_b = jnp.cross(w, jnp.array([v_hat, 0.0, 0.0]))
+        a_b = jnp.cross(w, jnp.array([v_hat + dv, 0.0, 0.0]))
         Rq = rotation_from_quat(q)
         x = jnp.zeros(NX)
         # the bias error also enters the air-data correction: a_b,true = â_b − (δc + δg) × v_b
-        Sv = skew(jnp.array([v_hat, 0.0, 0.0]))
+        Sv = skew(jnp.array([v_hat + dv, 0.0, 0.0]))
         # f_m = (1 + s_a)∘(a_b + R̂ᵀ(−g)) + b_a
         f_hat = a_b + Rq.T @ (-g_ned)
         Da = jnp.diag(1.0 + sa)
         H_a = jnp.concatenate(
-            [Da @ specific_force_jacobian(q, -g_ned), Da @ Sv, Da @ Sv, I3, Z3, jnp.diag(f_hat), Z3], axis=1
+            [
+                Da @ specific_force_jacobian(q, -g_ned),
+                Da @ Sv,
+                Da @ Sv,
+                I3,
+                Z3,
+                jnp.diag(f_hat),
+                Z3,
+                (Da @ jnp.cross(w, jnp.array([1.0, 0.0, 0.0])))[:, None],
+            ],
+            axis=1,
         )
         ok_a = jnp.abs(jnp.linalg.norm(f_m - a_b) - GRAVITY) <= tun.accel_gate
         x, P, ok_a = update(x, P, f_m, (1.0 + sa) * f_hat + ba, H_a, R_a, ok_a)
         # m_m = (1 + s_m)∘R̂ᵀm_N + b_m
         m_hat = Rq.T @ m_ned
         Dm = jnp.diag(1.0 + sm)
-        H_m = jnp.concatenate([Dm @ specific_force_jacobian(q, m_ned), Z3, Z3, Z3, I3, Z3, jnp.diag(m_hat)], axis=1)
+        H_m = jnp.concatenate(
+            [Dm @ specific_force_jacobian(q, m_ned), Z3, Z3, Z3, I3, Z3, jnp.diag(m_hat), jnp.zeros((3, 1))], axis=1
+        )
         ok_m = jnp.abs(jnp.linalg.norm(m_m) - jnp.linalg.norm(m_ned)) <= tun.mag_gate
         x, P, ok_m = update(x, P, m_m, (1.0 + sm) * m_hat + bm, H_m, R_m, ok_m)
         # reset
         q = quat_mul(q, quat_exp(x[:3]))
         q = q / jnp.linalg.norm(q)
         c, g, ba, bm = c + x[3:6], g + x[6:9], ba + x[9:12], bm + x[12:15]
-        sa, sm = sa + x[15:18], sm + x[18:21]
+        sa, sm, dv = sa + x[15:18], sm + x[18:21], dv + x[21]
         G = jnp.eye(NX).at[:3, :3].set(I3 - 0.5 * skew(x[:3]))
         P = G @ P @ G.T
-        return (q, c, g, ba, bm, sa, sm, P, v_hat), (q, P[:3, :3], c + g, ok_a, ok_m)
+        return (q, c, g, ba, bm, sa, sm, dv, P, v_hat), (q, P[:3, :3], c + g, ok_a, ok_m)
 
     z3 = jnp.zeros(3)
-    carry0 = (jnp.asarray(q0, float), z3, z3, z3, z3, z3, z3, P0, airspeed[0])
+    carry0 = (jnp.asarray(q0, float), z3, z3, z3, z3, z3, z3, jnp.zeros(()), P0, airspeed[0])
     _, (qs, Pa, bias, oka, okm) = jax.lax.scan(step, carry0, (gyro, accel, mag, airspeed))
     return MekfResult(qs, Pa, bias, jnp.mean(oka), jnp.mean(okm))
 

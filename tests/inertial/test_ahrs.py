@@ -142,3 +142,21 @@ def test_mekf_rejects_bad_shapes():
         )
     with pytest.raises(ValueError, match="q0"):
         ahrs.mekf_run(ahrs.MekfTuning(), jnp.zeros(3), z, z, z, jnp.zeros(n), ahrs.earth_field(), 0.1)
+
+
+def test_complementary_filter_converges_and_estimates_the_gyro_bias():
+    """Noise-free static case with a constant gyro bias: the attitude converges to the truth and the
+    bias integral to the bias (the fixed point of the filter)."""
+    e_true = jnp.array([0.1, -0.05, 0.7])
+    R = rotation_zyx(e_true)
+    n, dt = 6000, 0.05
+    bias = jnp.array([0.003, -0.002, 0.001])
+    gyro = jnp.tile(bias, (n, 1))
+    accel = jnp.tile(R.T @ jnp.array([0.0, 0.0, -ahrs.GRAVITY]), (n, 1))
+    mag = jnp.tile(R.T @ ahrs.earth_field(), (n, 1))
+    q0 = quat_mul(ahrs.quat_from_euler(e_true), ahrs.quat_exp(jnp.array([0.05, -0.08, 0.1])))
+    gains = ahrs.ComplementaryGains(tilt_crossover=0.1, heading_crossover=0.1, ki_ratio=0.25)
+    res = ahrs.complementary_run(gains, q0, gyro, accel, mag, jnp.zeros(n), dt)
+    err = np.asarray(ahrs.euler_error(ahrs.euler_from_quat(res.q[-1]), e_true))
+    assert np.max(np.abs(err)) < 1e-4
+    np.testing.assert_allclose(np.asarray(res.bias[-1]), np.asarray(bias), atol=1e-6)
