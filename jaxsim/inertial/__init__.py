@@ -14,7 +14,8 @@ gyro-carousel least squares, attitude update algorithms.
   (imported by full path);
 * :mod:`jaxsim.inertial.ahrs` — a MEMS AHRS (seed 004 §2.5, Luchkina): the Table 1 sensor-error
   generator (bias, scale, temperature, white and first-order Gauss–Markov noise), a prescribed
-  manoeuvre flight, raw accelerometer/magnetometer attitude, a 22-state MEKF and a complementary filter (imported by full path).
+  manoeuvre flight, raw accelerometer/magnetometer attitude, a 22-state MEKF and a complementary
+  filter (imported by full path).
 
 The Allan-variance estimator itself is :mod:`jaxsim.estimation.allan`.
 """
