@@ -68,6 +68,7 @@ class Config:
     accel_sigma: float = 0.05  # m/s², MEKF accelerometer σ [assumed]
     mag_sigma: float = 0.5  # µT, MEKF magnetometer σ [assumed]
     accel_gate: float = 0.5  # m/s², correction limiting [assumed]
+    correction_rate: float = 10.0  # Hz, accelerometer/magnetometer corrections of the MEKF [assumed]
     attitude0_deg: float = 2.0  # initial attitude error σ [assumed]
     cf_crossover: float = 0.05  # rad/s, complementary filter, tilt and heading loops [assumed]
     cf_ki_ratio: float = 0.25  # bias integral k_i = ratio·ω_c² [assumed]
@@ -238,7 +239,8 @@ def one_run(cfg: Config, key: jax.Array, cf_crossover: Any, cf_ki_ratio: Any) ->
     e_pos = ahrs.euler_error(jnp.concatenate([tilt, heading[:, None]], axis=1), e_true)
 
     # after: the MEKF
-    res = ahrs.mekf_run(tun, q0, gyro_cal, meas["accel"], mag_cal, meas["airspeed"], m_ned, dt)
+    every = max(1, int(round(1.0 / (cfg.correction_rate * dt))))
+    res = ahrs.mekf_run(tun, q0, gyro_cal, meas["accel"], mag_cal, meas["airspeed"], m_ned, dt, update_every=every)
     e_est = ahrs.euler_error(jax.vmap(ahrs.euler_from_quat)(res.q), e_true)
     keep = tt >= cfg.settle
     w = keep / jnp.sum(keep)

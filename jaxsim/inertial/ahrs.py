@@ -361,11 +361,15 @@ def mekf_run(
     m_ned: jax.Array,
     dt: float,
     airspeed_tau: float = 10.0,
+    update_every: int = 1,
 ) -> MekfResult:
     """Run the 22-state MEKF (module docstring) over gyro/accel/mag ``(n, 3)`` and ``airspeed (n,)``.
 
     ``airspeed`` is low-passed (first order, ``airspeed_tau`` s) before the linear-acceleration
-    correction ``a_b = (ω_m − ĉ − ĝ) × [V̂, 0, 0]``.  Covariance updates in Joseph form."""
+    correction ``a_b = (ω_m − ĉ − ĝ) × [V̂, 0, 0]``.  The corrections run every ``update_every``
+    samples (their residual errors are correlated in time; correcting at the full sensor rate would
+    treat them as white and make the filter overconfident).  Covariance updates in Joseph form."""
+    update_every = check_positive_int("update_every", update_every)
     check_shape("q0", q0, (4,))
     n = gyro.shape[0]
     for name, arr in (("accel", accel), ("mag", mag)):
@@ -417,7 +421,8 @@ def mekf_run(
 
     def step(carry, inp):
         q, c, g, ba, bm, sa, sm, dv, P, v_hat = carry
-        w_m, f_m, m_m, v_m = inp
+        w_m, f_m, m_m, v_m, k = inp
+        due = k % update_every == update_every - 1
         # propagate
         w = w_m - c - g
         phi = w * dt
@@ -453,7 +458,7 @@ def mekf_run(
             ],
             axis=1,
         )
-        ok_a = jnp.abs(jnp.linalg.norm(f_m - a_b) - GRAVITY) <= tun.accel_gate
+        ok_a = (jnp.abs(jnp.linalg.norm(f_m - a_b) - GRAVITY) <= tun.accel_gate) & due
         x, P, ok_a = update(x, P, f_m, (1.0 + sa) * f_hat + ba, H_a, R_a, ok_a)
         # m_m = (1 + s_m)∘R̂ᵀm_N + b_m
         m_hat = Rq.T @ m_ned
@@ -461,7 +466,7 @@ def mekf_run(
         H_m = jnp.concatenate(
             [Dm @ specific_force_jacobian(q, m_ned), Z3, Z3, Z3, I3, Z3, jnp.diag(m_hat), jnp.zeros((3, 1))], axis=1
         )
-        ok_m = jnp.abs(jnp.linalg.norm(m_m) - jnp.linalg.norm(m_ned)) <= tun.mag_gate
+        ok_m = (jnp.abs(jnp.linalg.norm(m_m) - jnp.linalg.norm(m_ned)) <= tun.mag_gate) & due
         x, P, ok_m = update(x, P, m_m, (1.0 + sm) * m_hat + bm, H_m, R_m, ok_m)
         # reset
         q = quat_mul(q, quat_exp(x[:3]))
@@ -474,8 +479,8 @@ def mekf_run(
 
     z3 = jnp.zeros(3)
     carry0 = (jnp.asarray(q0, float), z3, z3, z3, z3, z3, z3, jnp.zeros(()), P0, airspeed[0])
-    _, (qs, Pa, bias, oka, okm) = jax.lax.scan(step, carry0, (gyro, accel, mag, airspeed))
-    return MekfResult(qs, Pa, bias, jnp.mean(oka), jnp.mean(okm))
+    _, (qs, Pa, bias, oka, okm) = jax.lax.scan(step, carry0, (gyro, accel, mag, airspeed, jnp.arange(n)))
+    return MekfResult(qs, Pa, bias, jnp.sum(oka) / (n // update_every), jnp.sum(okm) / (n // update_every))
 
 
 # --- the complementary filter ---------------------------------------------------------------------

@@ -140,6 +140,10 @@ def test_mekf_rejects_bad_shapes():
         ahrs.mekf_run(
             ahrs.MekfTuning(), jnp.array([1.0, 0, 0, 0]), z, jnp.zeros((n, 2)), z, jnp.zeros(n), ahrs.earth_field(), 0.1
         )
+    with pytest.raises(ValueError, match="update_every"):
+        ahrs.mekf_run(
+            ahrs.MekfTuning(), jnp.array([1.0, 0, 0, 0]), z, z, z, jnp.zeros(n), ahrs.earth_field(), 0.1, update_every=0
+        )
     with pytest.raises(ValueError, match="q0"):
         ahrs.mekf_run(ahrs.MekfTuning(), jnp.zeros(3), z, z, z, jnp.zeros(n), ahrs.earth_field(), 0.1)
 
