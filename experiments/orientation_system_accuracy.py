@@ -68,7 +68,7 @@ class Config:
     accel_sigma: float = 0.05  # m/s², MEKF accelerometer σ [assumed]
     mag_sigma: float = 0.5  # µT, MEKF magnetometer σ [assumed]
     accel_gate: float = 0.5  # m/s², correction limiting [assumed]
-    correction_rate: float = 10.0  # Hz, accelerometer/magnetometer corrections of the MEKF [assumed]
+    correction_rate: float = 25.0  # Hz, accelerometer/magnetometer corrections of the MEKF [assumed]
     attitude0_deg: float = 2.0  # initial attitude error σ [assumed]
     cf_crossover: float = 0.05  # rad/s, complementary filter, tilt and heading loops [assumed]
     cf_ki_ratio: float = 0.25  # bias integral k_i = ratio·ω_c² [assumed]
