@@ -11,7 +11,11 @@ gyro-carousel least squares, attitude update algorithms.
   two- and three-sample coning corrections), classical coning motion and its closed-form drift;
 * :mod:`jaxsim.inertial.bench_calibration` — the 24-state IMU bench-calibration model on a single-axis
   table (seed 004 B3): rotation plans, information-matrix observability ranks, covariance runs
-  (imported by full path).
+  (imported by full path);
+* :mod:`jaxsim.inertial.ahrs` — a MEMS AHRS (seed 004 §2.5, Luchkina): the Table 1 sensor-error
+  generator (bias, scale, temperature, white and first-order Gauss–Markov noise), a prescribed
+  manoeuvre flight, raw accelerometer/magnetometer attitude, a 22-state MEKF and a complementary
+  filter (imported by full path).
 
 The Allan-variance estimator itself is :mod:`jaxsim.estimation.allan`.
 """
