@@ -246,9 +246,9 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         "is 1000 m); intervals: bootstrap over runs, 95 %; the same truth runs for both variants",
         f"mean NEES (2 dof) 95 % χ² bounds for {cfg.n_runs} runs: [{chi_lo:.2f}, {chi_hi:.2f}]",
         "Table 1 counts are per particle per step, from the jaxpr of one step (slope between "
-        f"L = {cfg.op_count_particles}); multiplications include divisions; ours differ from the paper's "
-        "(different state bookkeeping; systematic resampling draws one uniform and finds the ancestors by "
-        "binary search on the sorted positions, ⌈log2 L⌉+1 comparisons per particle, no sort)",
+        f"L = {cfg.op_count_particles}); real-valued operations only, multiplications include divisions; ours "
+        "differ from the paper's (different state bookkeeping; systematic resampling draws one uniform and "
+        "finds the ancestors by binary search of the ordered positions, O(log L) comparisons per particle, no sort)",
         f"vmapped over {cfg.n_runs} runs: {state_bytes / 1e6:.1f} MB of particle state per step; "
         + ", ".join(f"{n}: {metrics[f'particle_steps_per_s_{n}']:.3g} particle-steps/s" for n in timing),
         "maps are synthetic (Gaussian covariance, assumed correlation length): the paper's RMS values depend "

@@ -1,13 +1,15 @@
 """Arithmetic-operation tally of a JAX function, read from its jaxpr (seed 004 part 4 §B4, Table 1).
 
 :func:`count_operations` traces ``fn(*args)`` and walks the jaxpr (into nested ``jit``, custom-JVP and
-``scan`` bodies, the latter times their length), adding up *element* operations by category:
+``scan`` bodies, the latter times their length), adding up *element* operations on real (floating-point) values by category — integer index
+arithmetic is not counted:
 
 * ``mul``: ``mul``, ``div``, ``integer_pow`` (``x^k`` as ``k − 1`` products), ``square``, and the
   products of a ``dot_general`` (``M·N·K``);
 * ``add``: ``add``, ``sub``, the sums of a ``dot_general`` (``M·N·(K − 1)``), ``reduce_sum`` and
   ``cumsum``;
-* ``exp``, ``log``, ``compare`` (``lt``, ``le``, ``gt``, ``ge``, ``eq``, ``ne``, ``max``, ``min``),
+* ``exp``, ``log``, ``compare`` (``lt``, ``le``, ``gt``, ``ge``, ``eq``, ``ne``, ``max``, ``min`` of
+  real operands),
   ``sort`` (number of sort calls) and ``sort_elements``;
 * calls named in ``opaque`` (e.g. ``{"map_lookup": "interpolation"}``, and by default the random
   draws ``_normal`` → ``gaussian``, ``_uniform`` → ``uniform``) count their output elements in their
@@ -35,6 +37,13 @@ def _size(aval: Any) -> int:
     return int(np.prod(aval.shape)) if hasattr(aval, "shape") else 1
 
 
+def _inexact(aval: Any) -> bool:
+    try:
+        return bool(np.issubdtype(aval.dtype, np.inexact))
+    except (AttributeError, TypeError):  # PRNG key types
+        return False
+
+
 def _sub_jaxprs(params: dict) -> list:
     out = []
     for v in params.values():
@@ -54,14 +63,18 @@ def _walk(jaxpr: Any, scale: int, opaque: dict[str, str], tally: Counter) -> Non
         if call in opaque:
             tally[opaque[call]] += scale * sum(_size(v.aval) for v in eqn.outvars)
             continue
-        if name in _MUL:
+        real = bool(eqn.outvars) and _inexact(eqn.outvars[0].aval)
+        if name in _CMP:
+            if eqn.invars and _inexact(eqn.invars[0].aval):
+                tally["compare"] += scale * size
+        elif not real:
+            pass
+        elif name in _MUL:
             tally["mul"] += scale * size
         elif name == "integer_pow":
             tally["mul"] += scale * size * (abs(int(eqn.params["y"])) - 1)
         elif name in _ADD:
             tally["add"] += scale * size
-        elif name in _CMP:
-            tally["compare"] += scale * size
         elif name in ("exp", "log"):
             tally[name] += scale * size
         elif name == "reduce_sum":
