@@ -63,7 +63,9 @@ def np_filter(p: dict, rng: np.random.Generator, z: np.ndarray, x_ns: np.ndarray
             idx = np.minimum(np.searchsorted(cdf, (rng.random() + np.arange(n)) / n, side="right"), n - 1)
             x, c_mean, w = x[idx], c_mean[idx], np.full(n, 1.0 / n)
         xv = np.stack([x[:, 2:4], x[:, 4:6]], -1)
-        xv = np.einsum("ij,naj->nai", p["phi"], xv) + np.einsum("ij,naj->nai", p["chol_q"], rng.standard_normal((n, 2, 2)))
+        xv = np.einsum("ij,naj->nai", p["phi"], xv) + np.einsum(
+            "ij,naj->nai", p["chol_q"], rng.standard_normal((n, 2, 2))
+        )
         x = np.concatenate([x[:, :2], xv[:, :, 0], xv[:, :, 1]], 1)
     return mean
 
@@ -95,10 +97,14 @@ def main() -> None:
         rng = np.random.default_rng(1)
 
         def run_np():
-            return np.stack([np_filter(p, rng, np.asarray(z[r]), np.asarray(x_ns[r]), a.particles, res) for r in range(a.runs)])
+            return np.stack(
+                [np_filter(p, rng, np.asarray(z[r]), np.asarray(x_ns[r]), a.particles, res) for r in range(a.runs)]
+            )
 
         def run_one():
-            return np.stack([np.asarray(one(model, keys[r], z[r], x_ns[r], a.particles, res).mean[-1]) for r in range(a.runs)])
+            return np.stack(
+                [np.asarray(one(model, keys[r], z[r], x_ns[r], a.particles, res).mean[-1]) for r in range(a.runs)]
+            )
 
         def run_vmap():
             return np.asarray(many(model, keys, z, x_ns, a.particles, res).mean[:, -1])
@@ -109,7 +115,9 @@ def main() -> None:
             out[f"{tag}_{name}_s"] = t
             out[f"{tag}_{name}_particle_steps_per_s"] = ps / t
             out[f"{tag}_{name}_rms_m"] = rms(final)
-            print(f"{tag:9s} {name:9s} median {t:8.3f} s  {ps / t:10.3e} particle-steps/s  final RMS {rms(final):6.0f} m")
+            print(
+                f"{tag:9s} {name:9s} median {t:8.3f} s  {ps / t:10.3e} particle-steps/s  final RMS {rms(final):6.0f} m"
+            )
         for name in ("jax_loop", "jax_vmap"):
             ratio = out[f"{tag}_numpy_s"] / out[f"{tag}_{name}_s"]
             out[f"{tag}_speedup_{name}_over_numpy"] = ratio

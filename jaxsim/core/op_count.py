@@ -1,8 +1,8 @@
 """Arithmetic-operation tally of a JAX function, read from its jaxpr (seed 004 part 4 §B4, Table 1).
 
 :func:`count_operations` traces ``fn(*args)`` and walks the jaxpr (into nested ``jit``, custom-JVP and
-``scan`` bodies, the latter times their length), adding up *element* operations on real (floating-point) values by category — integer index
-arithmetic is not counted:
+``scan`` bodies, the latter times their length), adding up *element* operations on real
+(floating-point) values by category — integer index arithmetic is not counted:
 
 * ``mul``: ``mul``, ``div``, ``integer_pow`` (``x^k`` as ``k − 1`` products), ``square``, and the
   products of a ``dot_general`` (``M·N·K``);

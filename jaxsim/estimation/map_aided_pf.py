@@ -182,9 +182,7 @@ def pf_step(
     return PFState(propagate(model, k_prop, x), c_mean, c_var, w), est
 
 
-def simulate_run(
-    model: MapPFModel, key: jax.Array, track: jax.Array
-) -> tuple[jax.Array, jax.Array, jax.Array]:
+def simulate_run(model: MapPFModel, key: jax.Array, track: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
     """One truth realisation along the true ``track (T, 2)`` km: ``(x_ns (T, 2), z (T,), error (T, 2))``
     with the true NS error drawn from the filter's own prior and dynamics, ``c ~ N(0, σ_c²)``."""
     k0, kc, kv, kw = jax.random.split(key, 4)

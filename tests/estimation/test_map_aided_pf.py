@@ -88,7 +88,7 @@ def test_markov2_discretisation_is_stationary():
     np.testing.assert_allclose(phi @ p @ phi.T + lq @ lq.T, p, rtol=1e-9, atol=1e-12)
     import scipy.linalg
 
-    a = np.array([[0.0, 1.0], [-(1 / 1200) ** 2, -2 / 1200]])
+    a = np.array([[0.0, 1.0], [-((1 / 1200) ** 2), -2 / 1200]])
     np.testing.assert_allclose(phi, scipy.linalg.expm(a * 300.0), rtol=1e-9)
 
 
@@ -98,7 +98,9 @@ def test_operation_counter_against_hand_counts():
     assert c == {"mul": 14, "add": 14, "exp": 7}
     c = count_operations(lambda a, v: a @ v, m, jnp.ones(4))  # 3 outputs, 4 products, 3 sums each
     assert c == {"mul": 12, "add": 9}
-    c = count_operations(lambda k: jax.random.normal(k, (5, 2)) + jnp.sort(jax.random.uniform(k, (3,))).sum(), jax.random.PRNGKey(0))
+    c = count_operations(
+        lambda k: jax.random.normal(k, (5, 2)) + jnp.sort(jax.random.uniform(k, (3,))).sum(), jax.random.PRNGKey(0)
+    )
     assert c["gaussian"] == 10 and c["uniform"] == 3 and c["sort"] == 1 and c["sort_elements"] == 3
     c = count_operations(lambda a: jax.lax.scan(lambda s, _: (s * a, None), a, None, length=5)[0], x)
     assert c == {"mul": 35}

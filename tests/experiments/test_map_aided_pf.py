@@ -36,7 +36,11 @@ def test_files_and_verdicts(result):
             ok = abs(ours - claim.paper) <= (claim.abs_tol or 0) + (claim.rel_tol or 0) * abs(claim.paper)
         assert row["verdict"] == ("reproduced" if ok else "differs"), row
     rows = {r["metric"]: r for r in res["reproduction"]}
-    for name in ("ops_sis_gaussian_per_particle", "ops_resampled_exp_per_particle", "ops_sis_interpolation_per_particle"):
+    for name in (
+        "ops_sis_gaussian_per_particle",
+        "ops_resampled_exp_per_particle",
+        "ops_sis_interpolation_per_particle",
+    ):
         assert rows[name]["verdict"] == "reproduced", name
 
 
