@@ -21,7 +21,15 @@ import jax.numpy as jnp
 from jaxsim.core.grid_interp import bilinear, bilinear_jacobian
 from jaxsim.core.validation import check_positive, is_concrete
 
-__all__ = ["bilinear", "bilinear_jacobian", "gaussian_random_field", "gradient_field", "mean_gradient_modulus"]
+__all__ = [
+    "anisotropic_random_field",
+    "bilinear",
+    "bilinear_jacobian",
+    "gaussian_random_field",
+    "gradient_field",
+    "mean_axis_gradients",
+    "mean_gradient_modulus",
+]
 
 
 def gradient_field(values: Any, spacing: float) -> tuple[Any, Any]:
@@ -57,3 +65,41 @@ def gaussian_random_field(
     f = jnp.fft.ifft2(jnp.fft.fft2(jax.random.normal(key, shape)) * amp).real
     f = f - jnp.mean(f)
     return f * (mean_gradient / mean_gradient_modulus(f, spacing))
+
+
+def mean_axis_gradients(values: Any, spacing: float) -> tuple[Any, Any]:
+    """``(mean |∂f/∂x|, mean |∂f/∂y|)`` over the grid (field units per m, or per the unit of ``spacing``)."""
+    gx, gy = gradient_field(values, spacing)
+    return jnp.mean(jnp.abs(gx), axis=(-2, -1)), jnp.mean(jnp.abs(gy), axis=(-2, -1))
+
+
+def anisotropic_random_field(
+    key: jax.Array, shape: tuple[int, int], spacing: float, corr_length: Any, mean_gradients: Any
+) -> Any:
+    """One zero-mean realisation ``(ny, nx)`` with mean ``|∂f/∂x| ≈ g_x`` and ``|∂f/∂y| ≈ g_y``
+    (``mean_gradients = (g_x, g_y)``, units per unit of ``spacing``).
+
+    Gaussian covariance with lengths ``ℓ_x = ℓ√(g_y/g_x)``, ``ℓ_y = ℓ√(g_x/g_y)`` (geometric mean
+    ``ℓ = corr_length``), so that the expected ratio of the mean axis gradients is ``g_x/g_y``; then one
+    scale factor makes ``mean|∂f/∂x| + mean|∂f/∂y| = g_x + g_y`` exactly (each axis alone only up to the
+    realisation's scatter: report :func:`mean_axis_gradients`)."""
+    ny, nx = shape
+    check_positive("spacing", spacing)
+    if is_concrete(corr_length):
+        check_positive("corr_length", corr_length)
+    g = jnp.asarray(mean_gradients, dtype=float)
+    if g.shape != (2,):
+        raise ValueError(f"mean_gradients: expected (g_x, g_y), got shape {tuple(g.shape)}")
+    if is_concrete(g):
+        check_positive("mean_gradients", g)
+    if ny < 3 or nx < 3:
+        raise ValueError(f"shape: need at least 3×3 nodes, got {shape}")
+    lx = corr_length * jnp.sqrt(g[1] / g[0])
+    ly = corr_length * jnp.sqrt(g[0] / g[1])
+    kx = 2 * jnp.pi * jnp.fft.fftfreq(nx, spacing)
+    ky = 2 * jnp.pi * jnp.fft.fftfreq(ny, spacing)
+    amp = jnp.exp(-0.25 * ((ky[:, None] * ly) ** 2 + (kx[None, :] * lx) ** 2))
+    f = jnp.fft.ifft2(jnp.fft.fft2(jax.random.normal(key, shape)) * amp).real
+    f = f - jnp.mean(f)
+    ax, ay = mean_axis_gradients(f, spacing)
+    return f * ((g[0] + g[1]) / (ax + ay))
