@@ -26,7 +26,9 @@ their soft surrogate); :mod:`~.wind` (seed 004 #11: wind from air data + INS and
 :mod:`~.ekf_slam` (seed 004 B2: EKF-SLAM with state augmentation in static shapes) and, for
 multi-object tracking (seed 000, paper 3), :mod:`~.association` (Gaussian scores, gate, greedy
 assignment) and :mod:`~.mot_metrics` (CLEAR MOT on the host), :mod:`~.nav_error_models` (seed 004 B4:
-navigation error models and the exact error covariance of a filter with the wrong model).
+navigation error models and the exact error covariance of a filter with the wrong model),
+:mod:`~.map_aided_pf` (seed 004 B4: Rao–Blackwellised map-aided particle filter), :mod:`~.drem` and
+:mod:`~.pmsm_flux` (seed 004 #29: DREM and the PMSM flux regression).
 """
 
 from jaxsim.estimation.adapters import (
