@@ -1,0 +1,55 @@
+"""The path_following_allocation study through the CLI (tiny preset): files, verdicts against bands, and
+the per-segment statistics recomputed from the written run-0 trace and the exact track geometry."""
+
+import math
+
+import numpy as np
+import pytest
+
+from experiments.path_following_allocation import STUDY
+from tests.experiments.study_cli import run_quick_study
+
+
+@pytest.fixture(scope="module")
+def result(tmp_path_factory):
+    out = tmp_path_factory.mktemp("pfa")
+    return out, run_quick_study("path_following_allocation", out, preset="tiny")
+
+
+def test_files_and_verdicts(result):
+    out, res = result
+    _, tiny = STUDY.resolve("tiny")
+    assert res["preset"] == "tiny" and res["config"]["n_runs"] == tiny.n_runs
+    for name in ("segments.csv", "run0.csv", "path_following.png", "reproduction.csv"):
+        assert (out / name).exists(), name
+    m = res["metrics"]
+    for row in res["reproduction"]:
+        claim = next(c for c in STUDY.claims if c.metric == row["metric"])
+        ours = m[row["metric"]]
+        if claim.band is not None:
+            ok = claim.band[0] <= ours <= claim.band[1]
+        elif claim.abs_tol is not None:
+            ok = abs(ours - claim.paper) <= claim.abs_tol
+        else:
+            ok = abs(ours - claim.paper) <= claim.rel_tol * abs(claim.paper)
+        assert row["verdict"] == ("reproduced" if ok else "differs"), row
+
+
+def test_numbers_recomputed(result):
+    res = result[1]
+    m = res["metrics"]
+    assert m["track_length_m"] == pytest.approx(475 + 100 * math.pi, rel=1e-13)
+    run0 = res["tables"]["run0"]
+    s = np.array([r["s_m"] for r in run0])
+    e = np.abs([r["e_y_m"] for r in run0])
+    a, b = 200 + 75 * math.pi + 100, 200 + 75 * math.pi + 100 + 12.5 * math.pi
+    mask = (s >= a) & (s < b)
+    seg = {r["segment"]: r for r in res["tables"]["segments"]}
+    # run 0's peak in the first R 25 curve (segment from the exact geometry) lies in the runs' range
+    r25 = seg["curve_90_r25_a"]
+    assert r25["peak_min_m"] - 1e-12 <= e[mask].max() <= r25["peak_max_m"] + 1e-12
+    assert r25["peak_min_m"] <= m["peak_r25_first_m"] <= r25["peak_max_m"]
+    assert m["rms_all_m"] > 0 and m["allocation_error_rms_run"] < 1e-2
+    assert m["straight_rms_max_m"] == pytest.approx(
+        max(r["rms_mean_m"] for k, r in seg.items() if k.startswith("straight"))
+    )
