@@ -53,3 +53,17 @@ def test_numbers_recomputed(result):
     assert m["straight_rms_max_m"] == pytest.approx(
         max(r["rms_mean_m"] for k, r in seg.items() if k.startswith("straight"))
     )
+
+
+def test_tuned_designs_rescored_on_the_monte_carlo(result):
+    """Gradient and PSO designs (equal budgets) in the designs table, inside the search box, the hand
+    design's RMS equal to the segment statistics' overall RMS (same draws, same gains)."""
+    res = result[1]
+    rows = {r["design"]: r for r in res["tables"]["designs"]}
+    assert set(rows) == {"hand", "gradient", "pso"}
+    m = res["metrics"]
+    assert rows["hand"]["rms_all_m"] == pytest.approx(m["rms_all_m"], rel=1e-9)
+    assert m["gradient_over_hand_rms"] == pytest.approx(rows["gradient"]["rms_all_m"] / rows["hand"]["rms_all_m"])
+    for r in rows.values():
+        assert 2.0 <= r["delta_max"] <= 30.0 and 0.3 <= r["k_course"] <= 6.0
+    assert res["metrics"]["sims_gradient"] == res["metrics"]["sims_pso"]  # equal budgets
