@@ -88,7 +88,10 @@ def numpy_rhs(cfg: Config, x: np.ndarray, u: float = 0.0) -> np.ndarray:
     sd = s1 * phd
     mtt, mts, mss = cfg.j_f + m * (d**2 + s**2) + jb, -m * d - jb / r, m + jb / r**2
     rhs = np.array(
-        [u - 2 * m * s * sd * thd - m * g * (s * math.cos(th) - d * math.sin(th)), m * s * thd**2 - m * g * math.sin(th)]
+        [
+            u - 2 * m * s * sd * thd - m * g * (s * math.cos(th) - d * math.sin(th)),
+            m * s * thd**2 - m * g * math.sin(th),
+        ]
     )
     tdd, sdd = np.linalg.solve(np.array([[mtt, mts], [mts, mss]]), rhs)
     return np.array([thd, phd, tdd, (sdd - s2 * phd**2) / s1])
@@ -123,7 +126,9 @@ def design(cfg: Config) -> dict[str, Any]:
         k_half = jnp.zeros((2 * n + 1, 3)).at[::2].set(kt).at[1::2].set(0.5 * (kt[:-1] + kt[1:]))
         mu = pr.floquet_multipliers(a + b @ k_half[:, None, :], period)
         mu_open = pr.floquet_multipliers(a, period)
-        return dict(period=period, z=z, a=a, b=b, i_orbit=i_orbit, p=pp, residual=residual, k=kt, mu=mu, mu_open=mu_open)
+        return dict(
+            period=period, z=z, a=a, b=b, i_orbit=i_orbit, p=pp, residual=residual, k=kt, mu=mu, mu_open=mu_open
+        )
 
     out = run()
     phases = tv.phase(out["z"][::2], out["period"]).at[-1].set(2.0 * jnp.pi)
@@ -178,7 +183,9 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     # 4. closed loop from the paper's φ(0) and Monte Carlo
     sim = jax.jit(
         jax.vmap(
-            lambda x: tv.simulate(p, k, d["i_star"], d["period"], d["phases"], d["k"], x, d["period"] / n, cfg.sim_periods * n)
+            lambda x: tv.simulate(
+                p, k, d["i_star"], d["period"], d["phases"], d["k"], x, d["period"] / n, cfg.sim_periods * n
+            )
         )
     )
     x_paper = jnp.array([k * cfg.phi0, cfg.phi0, 0.0, 0.0])
@@ -251,9 +258,10 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     ]
     notes = [
         f"assumed plant m = {cfg.m} kg, r = {cfg.r} m, J_b = 2/5 m r², J_f = {cfg.j_f} kg·m², d = r (ρ = R/cos φ); "
-        f"constraint θ = {cfg.k}φ; target orbit through (φ_a = {cfg.amplitude} rad, 0): period {metrics['period_s']:.4f} s",
+        f"constraint θ = {cfg.k}φ; target orbit through (φ_a = {cfg.amplitude} rad, 0): "
+        f"period {metrics['period_s']:.4f} s",
         f"Floquet multipliers of the closed transverse loop: |μ| = {', '.join(f'{abs(v):.3g}' for v in mu)} "
-        f"(open loop max |μ| = {metrics['floquet_open_loop_max_modulus']:.3g}); full nonlinear loop by finite "
+        f"(open loop max |μ| = {metrics['floquet_open_loop_max_modulus']:.3g}: the open transverse system is a chain of integrators, all μ = 1); full nonlinear loop by finite "
         f"differences: {', '.join(f'{abs(v):.3g}' for v in mu_fd)}",
         f"from the paper's φ(0) = {cfg.phi0} rad: transverse error {metrics['phi0_initial_transverse_err']:.3g} → "
         f"{metrics['phi0_final_transverse_err']:.2e} after {cfg.sim_periods} periods",
@@ -265,7 +273,10 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     fig = figures.line_panels(
         [
             figures.panel(
-                {"closed loop (φ, φ̇)": (xs_cl[0, :, 1], xs_cl[0, :, 3], "b-"), "target orbit": (zs[:, 0], zs[:, 1], "k--")},
+                {
+                    "closed loop (φ, φ̇)": (xs_cl[0, :, 1], xs_cl[0, :, 3], "b-"),
+                    "target orbit": (zs[:, 0], zs[:, 1], "k--"),
+                },
                 "φ, rad",
                 "φ̇, rad/s",
                 title="φ(0) = −0.3 rad",

@@ -67,11 +67,8 @@ def periodic_riccati(
         p_start, ps = jax.lax.scan(step, p, idx)
         return p_start, ps
 
-    p_end = p0
-    for _ in range(periods - 1):
-        p_end, _ = one_period(p_end, None)
-    p_last_end = p_end
-    p_start, ps = one_period(p_end, None)
+    p_last_end = jax.lax.fori_loop(0, periods - 1, lambda _, p: one_period(p, None)[0], p0)
+    p_start, ps = one_period(p_last_end, None)
     grid = jnp.concatenate([ps[::-1], p_last_end[None]])  # t = 0 … T
     residual = jnp.max(jnp.abs(p_start - p_last_end)) / jnp.max(jnp.abs(p_start))
     return grid, residual

@@ -22,7 +22,12 @@ def oracle_accel(x, u, m=0.1, r=0.025, j_f=0.01, g=9.81):
     s, s1, s2 = d * math.tan(ph), d / math.cos(ph) ** 2, 2 * d * math.sin(ph) / math.cos(ph) ** 3
     sd = s1 * phd
     mass = np.array([[j_f + m * (d**2 + s**2) + jb, -m * d - jb / r], [-m * d - jb / r, m + jb / r**2]])
-    rhs = np.array([u - 2 * m * s * sd * thd - m * g * (s * math.cos(th) - d * math.sin(th)), m * s * thd**2 - m * g * math.sin(th)])
+    rhs = np.array(
+        [
+            u - 2 * m * s * sd * thd - m * g * (s * math.cos(th) - d * math.sin(th)),
+            m * s * thd**2 - m * g * math.sin(th),
+        ]
+    )
     tdd, sdd = np.linalg.solve(mass, rhs)
     return tdd, (sdd - s2 * phd**2) / s1
 
