@@ -261,7 +261,8 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         f"constraint θ = {cfg.k}φ; target orbit through (φ_a = {cfg.amplitude} rad, 0): "
         f"period {metrics['period_s']:.4f} s",
         f"Floquet multipliers of the closed transverse loop: |μ| = {', '.join(f'{abs(v):.3g}' for v in mu)} "
-        f"(open loop max |μ| = {metrics['floquet_open_loop_max_modulus']:.3g}: the open transverse system is a chain of integrators, all μ = 1); full nonlinear loop by finite "
+        f"(open loop max |μ| = {metrics['floquet_open_loop_max_modulus']:.3g}: "
+        "the open transverse system is a chain of integrators, all μ = 1); full nonlinear loop by finite "
         f"differences: {', '.join(f'{abs(v):.3g}' for v in mu_fd)}",
         f"from the paper's φ(0) = {cfg.phi0} rad: transverse error {metrics['phi0_initial_transverse_err']:.3g} → "
         f"{metrics['phi0_final_transverse_err']:.2e} after {cfg.sim_periods} periods",
