@@ -15,10 +15,13 @@ Models (:mod:`jaxsim.plants.ball_on_swing`, :mod:`jaxsim.control.periodic_riccat
    central finite differences of its one-period flow (eigenvalue 1 along the orbit plus the
    transverse ones);
 4. simulates the closed loop from the paper's ``φ(0) = −0.3 rad`` and a Monte Carlo of initial
-   conditions (basin estimate with a Wilson interval).
+   conditions (basin estimate with a Wilson interval);
+5. tunes the Riccati weights by gradient vs PSO on equal budgets (loss: log spectral radius of the
+   closed transverse monodromy + an assumed effort term) and re-scores each design by the nonlinear
+   closed loop.  ``k`` is not tuned (it moves the orbit).
 
 The paper prints no numbers but ``φ(0) = −0.3 rad`` (its matrices are garbled); all physical values
-are assumed.  Tuning ``k`` and the Riccati weights by gradient vs PSO is NOT done here.
+are assumed.
 """
 
 from __future__ import annotations
