@@ -222,7 +222,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         loss_label="∫ t |x̃_m|²/λ_m² dt, s²",
     )
     design_rows = []
-    for name, d in {"hand": {"gamma": cfg.gamma, "alpha": cfg.alpha}, **comp.designs}.items():
+    for name, d in comp.with_baseline("hand", {"gamma": cfg.gamma, "alpha": cfg.alpha}).items():
         rec = jax.tree_util.tree_map(np.asarray, sim(DRIVES["rotating"], float(d["gamma"]), float(d["alpha"]), cfg))
         e_d = np.linalg.norm(rec["x_m_drem"] - rec["x_m"], axis=-1) / lam_m
         design_rows.append(

@@ -230,7 +230,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         progress=progress,
         loss_label="E[miss² + cross-track²], m²",
     )
-    designs = {"hand": g0, **{k: {n: jnp.float64(v) for n, v in d.items()} for k, d in comp.designs.items()}}
+    designs = comp.with_baseline("hand", g0)
     design_rows = []
     for name, d in designs.items():  # re-scored on the fresh Monte-Carlo draws (not the tuning ones)
         out = jax.tree_util.tree_map(np.asarray, mc(d, draws, jnp.ones(6)))

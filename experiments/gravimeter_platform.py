@@ -241,7 +241,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
         progress=progress,
         loss_label="mean δ² over payloads and regimes, arcsec² (smooth friction)",
     )
-    designs = {"hand": d0, **{k: {n: jnp.float64(v) for n, v in d.items()} for k, d in comp.designs.items()}}
+    designs = comp.with_baseline("hand", d0)
     design_rows = []
     for name, d in designs.items():  # re-scored with the exact friction, the paper's roll
         row = {"design": name, **{n: float(d[n]) for n in DESIGN_NAMES}}

@@ -246,8 +246,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     )
     mc = jax.jit(jax.vmap(lambda k, d: simulate(cfg, knots, coef, k, n_steps, d), (0, None)))
     design_rows = []
-    for name, d in {"hand": gains_of(cfg), **comp.designs}.items():  # re-scored on the Monte-Carlo draws
-        dd = {n: jnp.float64(v) for n, v in d.items()}
+    for name, dd in comp.with_baseline("hand", gains_of(cfg)).items():  # re-scored on the Monte-Carlo draws
         o = mc(keys, dd)
         ed, sd = np.abs(np.asarray(o["e"])), np.asarray(o["s"])
         sg = np.clip(np.searchsorted(bounds, sd, side="right") - 1, 0, len(SEGMENTS) - 1)

@@ -61,6 +61,12 @@ class ComparisonStage(Stage):
     comparison: Comparison | None = None
     designs: dict[str, Any] = field(default_factory=dict)
 
+    def with_baseline(self, name: str, params: dict[str, Any]) -> dict[str, dict[str, Any]]:
+        """``{name: params, tuner: best params, …}`` with every value a float64 scalar: the designs to
+        re-score side by side (the hand design first)."""
+        as_scalars = lambda d: {k: jnp.float64(v) for k, v in d.items()}  # noqa: E731
+        return {name: as_scalars(params), **{k: as_scalars(d) for k, d in self.designs.items()}}
+
 
 def tune_and_compare(
     problem: Any,
