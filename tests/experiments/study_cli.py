@@ -29,3 +29,17 @@ def run_quick_study(name: str, out: Path, *extra: str, preset: str = "quick", ti
 def recorded_config(config) -> dict:
     """A study's resolved ``config`` (a dataclass) as ``results.json`` records it: tuples become lists."""
     return json.loads(json.dumps(dataclasses.asdict(config)))
+
+
+def assert_verdicts_follow_the_tolerances(res: dict, claims) -> None:
+    """Every row of ``res["reproduction"]`` says ``reproduced`` exactly when the study's metric lies within
+    its claim's band or ``abs_tol + rel_tol·|paper|`` (re-derived here, independently of the runner)."""
+    m = res["metrics"]
+    for row in res["reproduction"]:
+        claim = next(c for c in claims if c.metric == row["metric"])
+        ours = m[claim.metric]
+        if claim.band is not None:
+            ok = claim.band[0] <= ours <= claim.band[1]
+        else:
+            ok = abs(ours - claim.paper) <= (claim.abs_tol or 0.0) + (claim.rel_tol or 0.0) * abs(claim.paper)
+        assert row["verdict"] == ("reproduced" if ok else "differs"), row

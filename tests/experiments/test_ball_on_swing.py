@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from experiments.ball_on_swing import STUDY
-from tests.experiments.study_cli import run_quick_study
+from tests.experiments.study_cli import assert_verdicts_follow_the_tolerances, run_quick_study
 from tests.plants.test_ball_on_swing import oracle_accel
 
 pytestmark = pytest.mark.slow  # a short study run through the CLI: a few compilations
@@ -27,14 +27,7 @@ def test_config_files_and_verdicts(result):
     for name in ("orbit.csv", "floquet.csv", "monte_carlo.csv", "closed_loop.png", "reproduction.csv"):
         assert (out / name).exists(), name
     m = res["metrics"]
-    for row in res["reproduction"]:
-        claim = next(c for c in STUDY.claims if c.metric == row["metric"])
-        ours = m[row["metric"]]
-        if claim.band is not None:
-            ok = claim.band[0] <= ours <= claim.band[1]
-        else:
-            ok = abs(ours - claim.paper) <= (claim.abs_tol or 0) + (claim.rel_tol or 0) * abs(claim.paper)
-        assert row["verdict"] == ("reproduced" if ok else "not reproduced"), row
+    assert_verdicts_follow_the_tolerances(res, STUDY.claims)
     assert m["phi0_final_transverse_err"] < 1e-3 < m["phi0_initial_transverse_err"]
     assert any("tuning skipped" in n for n in res["notes"])  # tiny: tune_budget = 0
 

@@ -9,7 +9,7 @@ import pytest
 import scipy.stats
 
 from experiments.map_aided_pf import STUDY, make_maps
-from tests.experiments.study_cli import run_quick_study
+from tests.experiments.study_cli import assert_verdicts_follow_the_tolerances, run_quick_study
 
 pytestmark = pytest.mark.slow  # a short study run through the CLI: a few compilations
 
@@ -26,15 +26,7 @@ def test_files_and_verdicts(result):
     assert res["preset"] == "tiny" and res["config"]["n_particles"] == tiny.n_particles == 500
     for name in ("table2.csv", "table1_ops.csv", "final_errors.csv", "rms_vs_fix.png", "reproduction.csv"):
         assert (out / name).exists(), name
-    m = res["metrics"]
-    for row in res["reproduction"]:
-        claim = next(c for c in STUDY.claims if c.metric == row["metric"])
-        ours = m[claim.metric]
-        if claim.band is not None:
-            ok = claim.band[0] <= ours <= claim.band[1]
-        else:
-            ok = abs(ours - claim.paper) <= (claim.abs_tol or 0) + (claim.rel_tol or 0) * abs(claim.paper)
-        assert row["verdict"] == ("reproduced" if ok else "differs"), row
+    assert_verdicts_follow_the_tolerances(res, STUDY.claims)
     rows = {r["metric"]: r for r in res["reproduction"]}
     for name in (
         "ops_sis_gaussian_per_particle",

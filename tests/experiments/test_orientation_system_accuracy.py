@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from experiments.orientation_system_accuracy import ANGLES, STUDY
-from tests.experiments.study_cli import run_quick_study
+from tests.experiments.study_cli import assert_verdicts_follow_the_tolerances, run_quick_study
 
 pytestmark = pytest.mark.slow  # a short study run through the CLI: a few compilations
 
@@ -33,15 +33,7 @@ def test_config_files_and_verdicts(result):
         "reproduction.csv",
     ):
         assert (out / name).exists(), name
-    m = res["metrics"]
-    for row in res["reproduction"]:
-        ours = m[row["metric"]]
-        claim = next(c for c in STUDY.claims if c.metric == row["metric"])
-        if claim.band is not None:
-            ok = claim.band[0] <= ours <= claim.band[1]
-        else:
-            ok = abs(ours - claim.paper) <= (claim.abs_tol or 0.0) + (claim.rel_tol or 0.0) * abs(claim.paper)
-        assert row["verdict"] == ("reproduced" if ok else "differs"), row["metric"]
+    assert_verdicts_follow_the_tolerances(res, STUDY.claims)
     rows = {r["metric"]: r for r in res["reproduction"]}
     for name in ("attitude_update_max_err_deg", "attitude_update_order", "gm_autocorr_at_tau_ratio"):
         assert rows[name]["verdict"] == "reproduced", name

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from experiments.path_following_allocation import STUDY
-from tests.experiments.study_cli import run_quick_study
+from tests.experiments.study_cli import assert_verdicts_follow_the_tolerances, run_quick_study
 
 
 @pytest.fixture(scope="module")
@@ -22,17 +22,7 @@ def test_files_and_verdicts(result):
     assert res["preset"] == "tiny" and res["config"]["n_runs"] == tiny.n_runs
     for name in ("segments.csv", "run0.csv", "path_following.png", "reproduction.csv"):
         assert (out / name).exists(), name
-    m = res["metrics"]
-    for row in res["reproduction"]:
-        claim = next(c for c in STUDY.claims if c.metric == row["metric"])
-        ours = m[row["metric"]]
-        if claim.band is not None:
-            ok = claim.band[0] <= ours <= claim.band[1]
-        elif claim.abs_tol is not None:
-            ok = abs(ours - claim.paper) <= claim.abs_tol
-        else:
-            ok = abs(ours - claim.paper) <= claim.rel_tol * abs(claim.paper)
-        assert row["verdict"] == ("reproduced" if ok else "differs"), row
+    assert_verdicts_follow_the_tolerances(res, STUDY.claims)
 
 
 def test_numbers_recomputed(result):
