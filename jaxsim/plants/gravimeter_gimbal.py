@@ -9,11 +9,11 @@ The paper's equations (its ref. [4]) are lost; from its variable list::
 the ship's roll, ``M_TR`` the dry-friction torque in the gimbal bearing (relative velocity ``ω − θ̇``),
 ``M_DV`` the motor torque.  Units: rad, rad/s, N·m, kg·m², s.
 
-Dry friction is stepped exactly and event-free by the implicit (catch-up) scheme: with the friction
-impulse bound ``b = dt·M_TR/J`` and the free relative velocity ``s* = ω + dt·M/J − θ̇_next``, the new
-relative velocity is ``s* − clip(s*, −b, b)`` — zero (stick) when ``|s*| ≤ b``, else slip with the full
-friction.  :func:`step` with ``exact=False`` replaces ``clip(s, −b, b)`` by ``b·tanh(s/b)`` (smooth, for
-gradients; the same scale, no extra parameter).
+Dry friction is stepped exactly and event-free by the implicit catch-up scheme of
+:mod:`jaxsim.core.dry_friction`: with the friction impulse bound ``b = dt·M_TR/J`` and the free relative
+velocity ``s* = ω + dt·M/J − θ̇_next``, the new relative velocity is ``s* − clip(s*, −b, b)`` — zero
+(stick) when ``|s*| ≤ b``, else slip with the full friction.  :func:`step` with ``exact=False`` replaces
+``clip(s, −b, b)`` by ``b·tanh(s/b)`` (smooth, for gradients; the same scale, no extra parameter).
 """
 
 from __future__ import annotations
@@ -23,6 +23,8 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
+from jaxsim.core.dry_friction import catch_up
+from jaxsim.core.dry_friction import friction_impulse as _friction_impulse
 from jaxsim.core.pytree import pytree_dataclass
 from jaxsim.core.validation import check_positive
 
@@ -44,7 +46,7 @@ ABSOLUTE_60KG = Params(J=0.6, M_TR=0.15, M_max=1.5)
 
 def soft_clip(s: jax.Array, b: jax.Array) -> jax.Array:
     """``b·tanh(s/b)``: smooth stand-in for ``clip(s, −b, b)``."""
-    return b * jnp.tanh(s / b)
+    return _friction_impulse(s, b, exact=False)
 
 
 def step(
@@ -55,8 +57,7 @@ def step(
     check_positive("dt", dt)
     b = dt * p.M_TR / p.J
     s_free = x[1] + dt * torque / p.J - roll_rate_next
-    friction = jnp.clip(s_free, -b, b) if exact else soft_clip(s_free, b)
-    omega = roll_rate_next + s_free - friction
+    omega = roll_rate_next + catch_up(s_free, b, exact)
     return jnp.stack([x[0] + dt * omega, omega])
 
 
