@@ -172,3 +172,14 @@ def test_symmetric_gait_without_rest_grows_without_bound():
     scale = cg.natural_units(P)["mass_speed_unit"]
     v = [abs(float(cr.periodic_speed(P, *cg.symmetric_two_phase_gait(P, s * scale, 64), 1))) / unit for s in (1, 4)]
     assert v[1] > 3 * v[0] > 0
+
+
+def test_without_friction_the_centre_of_mass_stays_put():
+    """k → 0: no external force, so M·x + m·(x + ξ) is constant — the body moves by −μ·Δξ, whatever
+    the relative velocities (a momentum invariant, independent of the friction step)."""
+    p = cr.Params(k=1e-15)
+    u = jax.random.normal(jax.random.PRNGKey(5), (300,)) * 0.2
+    dt = 0.01
+    states = cr.rollout(p, u, dt)
+    xi = jnp.cumsum(u) * dt
+    np.testing.assert_allclose(np.asarray(states[:, 0]), -float(cr.mass_ratio(p)) * np.asarray(xi), atol=1e-12)
