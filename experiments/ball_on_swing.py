@@ -358,8 +358,10 @@ def _tuning(cfg: Config, d: dict[str, Any], sim_k, batch, metrics: dict[str, Any
         name: {c: float(v) for c, v in w.items()} for name, w in comp.designs.items()
     }
     rows = []
+    design_c = jax.jit(lambda ww: lqr_design(cfg, a, b, period, ww))  # compiled once for every design
+    loss_c = jax.jit(lambda w: loss(w, None, None))  # (op by op, each call took ~16 s)
     for name, w in designs.items():
-        out = jax.jit(lambda ww: lqr_design(cfg, a, b, period, ww))(jnp.asarray([w["q_i"], w["q_y"], hand[2], w["r"]]))
+        out = design_c(jnp.asarray([w["q_i"], w["q_y"], hand[2], w["r"]]))
         _, xt, u = (np.asarray(v) for v in sim_k(batch, out["k"]))  # row 0: φ(0) = −0.3 rad
         i_star = float(d["i_star"])
         err = np.maximum(np.abs(xt[0, :, 0]) / abs(i_star), np.abs(xt[0, :, 1]))
@@ -372,7 +374,7 @@ def _tuning(cfg: Config, d: dict[str, Any], sim_k, batch, metrics: dict[str, Any
             {
                 "design": name,
                 **w,
-                "loss": float(loss({c: jnp.asarray(v) for c, v in w.items()}, None, None)),
+                "loss": float(loss_c({c: jnp.asarray(v, dtype=jnp.float64) for c, v in w.items()})),
                 "floquet_max_modulus": rho,
                 "mean_gain_norm": float(np.mean(np.linalg.norm(np.asarray(out["k"]), axis=1))),
                 "settling_periods_exact": first / n if first >= 0 else math.nan,
