@@ -117,7 +117,7 @@ def velocity_control(cfg: Config, p: cr.Params) -> tuple[list[dict], dict[str, f
         i = int(np.argmax(v))
         if v[i] > best[0]:
             best = (float(v[i]), float(u1[i]), float(u2))
-    mass_scale = cg.natural_units(p)["mass_speed_unit"]
+    mass_scale = float(cr.mass_speed_unit(p))
     rows = []
     for s in cfg.symmetric_speeds:
         u, dt = cg.symmetric_two_phase_gait(p, s * mass_scale, 64)
@@ -153,7 +153,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     metrics: dict[str, float] = {}
     opt = cg.three_phase_optimum(p)
     metrics["v2_closed_form_over_unit"] = float(opt["speed"]) / unit
-    speed = jax.jit(lambda u, dt: cr.periodic_speed(p, u, dt, cfg.periods), static_argnums=())
+    speed = jax.jit(lambda u, dt: cr.periodic_speed(p, u, dt, cfg.periods))
     grid_rows = []
     for n in progress(list(cfg.grid_steps), desc="three-phase gait, refining grids", unit="grid"):
         u, dt = cg.three_phase_gait(p, n)
@@ -195,6 +195,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     for name, params in comp.designs.items():
         u, dt = gait_of(cfg, p, params)
         v = float(speed(u, dt)) / unit
+        states = np.asarray(cr.rollout(p, jnp.tile(u, cfg.periods), dt, u[-1]))
         gait_rows.append(
             {
                 "design": name,
@@ -202,14 +203,15 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
                 "period_time_units": float(params["period"]),
                 "stroke_over_L": float(cg.stroke_of(u, dt) / p.L),
                 "max_accel_over_kg_mu": float(cg.max_acceleration_of(u, dt) / cr.hold_acceleration(p)),
-                "min_body_velocity_m_s": float(jnp.min(cr.rollout(p, jnp.tile(u, cfg.periods), dt, u[-1])[:, 1])),
+                "min_body_velocity_m_s": float(states[:, 1].min()),
             }
         )
         metrics[f"v2_{name}_over_unit"] = v
-        traces[name] = (np.asarray(u), float(dt))
+        traces[name] = (np.asarray(u), float(dt), states)
     metrics["v2_gradient_over_three_phase_same_grid"] = metrics["v2_gradient_over_unit"] / three_same
     metrics["v2_pso_over_three_phase_same_grid"] = metrics["v2_pso_over_unit"] / three_same
-    traces["three-phase (closed form)"] = (np.asarray(u_same), float(dt_same))
+    states_same = np.asarray(cr.rollout(p, jnp.tile(u_same, cfg.periods), dt_same, u_same[-1]))
+    traces["three-phase (closed form)"] = (np.asarray(u_same), float(dt_same), states_same)
 
     vel_rows, vel_metrics, family = velocity_control(cfg, p)
     metrics.update(vel_metrics)
@@ -232,12 +234,11 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
 def _gait_figure(cfg: Config, p: cr.Params, traces: dict):
     tu, unit = float(cr.time_unit(p)), float(cr.speed_unit(p))
     xi_panel, x_panel = {}, {}
-    for name, (u, dt) in traces.items():
+    for name, (u, dt, states) in traces.items():  # states: the body over cfg.periods periods
         n = u.size
         t = np.arange(1, n + 1) * dt / tu
         xi = np.cumsum(u) * dt
         xi_panel[name] = (t, (xi - xi.min()) / p.L)
-        states = np.asarray(cr.rollout(p, jnp.tile(jnp.asarray(u), cfg.periods), dt, u[-1]))
         t_all = np.arange(1, states.shape[0] + 1) * dt / tu
         x_panel[name] = (t_all, states[:, 0] / (unit * tu))
     return figures.line_panels(

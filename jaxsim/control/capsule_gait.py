@@ -26,10 +26,17 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from jaxsim.core.dry_friction import slide
-from jaxsim.plants.capsule_robot import Params, hold_acceleration, mass_ratio, speed_unit, time_unit
+from jaxsim.core.validation import check_positive_int
+from jaxsim.plants.capsule_robot import Params, hold_acceleration, mass_ratio, speed_unit
+
+
+def _check_even(name: str, n: int) -> int:
+    n = check_positive_int(name, n)
+    if n % 2:
+        raise ValueError(f"{name}: must be even (the reversal falls on a step boundary), got {n}")
+    return n
 
 
 def bounded_acceleration_gait(theta: jax.Array, a_max: Any, stroke: Any, dt: Any) -> jax.Array:
@@ -41,9 +48,7 @@ def bounded_acceleration_gait(theta: jax.Array, a_max: Any, stroke: Any, dt: Any
     a = a_max * (1.0 - s / jnp.mean(s))
     u = jnp.cumsum(a) * dt
     u = u - jnp.mean(u)
-    xi = jnp.cumsum(u) * dt
-    span = jnp.max(xi) - jnp.min(xi)
-    return u * jnp.minimum(1.0, stroke / jnp.maximum(span, 1e-300))
+    return u * jnp.minimum(1.0, stroke / jnp.maximum(stroke_of(u, dt), 1e-300))
 
 
 def stroke_of(u: jax.Array, dt: Any) -> jax.Array:
@@ -71,6 +76,7 @@ def three_phase_optimum(p: Params) -> dict[str, Any]:
 def three_phase_gait(p: Params, n: int) -> tuple[jax.Array, jax.Array]:
     """:func:`three_phase_optimum`'s gait on ``n`` steps (``n`` even): ``(u (n,), dt)`` — ``u`` at the
     steps' midpoints, so the staircase's jumps are exactly ``a·dt``."""
+    n = _check_even("n", n)
     opt = three_phase_optimum(p)
     a, tau = hold_acceleration(p), opt["tau"]
     dt = 2 * tau / n
@@ -96,17 +102,9 @@ def symmetric_two_phase_gait(p: Params, speed: Any, n: int) -> tuple[jax.Array, 
     """Forward and back over the stroke at ``±speed`` (m/s), no rest: ``(u (n,), dt)``, ``n`` even.
     Its periodic regimes form a continuum (the body never stops); from rest the average speed grows
     with ``speed`` without bound — why the optimum needs a constraint set."""
+    n = _check_even("n", n)
     dt = 2 * p.L / speed / n
     return jnp.where(jnp.arange(n) < n // 2, speed, -speed) * jnp.ones(n), dt
-
-
-def natural_units(p: Params) -> dict[str, float]:
-    """``speed_unit``, ``time_unit`` and the mass's speed scale ``√(kgL/μ)`` as floats."""
-    return {
-        "speed_unit": float(speed_unit(p)),
-        "time_unit": float(time_unit(p)),
-        "mass_speed_unit": float(np.sqrt(float(p.k * p.g * p.L / mass_ratio(p)))),
-    }
 
 
 __all__ = [
@@ -117,5 +115,4 @@ __all__ = [
     "three_phase_gait",
     "resting_two_phase_speed",
     "symmetric_two_phase_gait",
-    "natural_units",
 ]

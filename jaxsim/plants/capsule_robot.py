@@ -32,6 +32,7 @@ import jax.numpy as jnp
 
 from jaxsim.core.dry_friction import slide
 from jaxsim.core.pytree import pytree_dataclass
+from jaxsim.core.validation import check_positive_int
 
 
 @pytree_dataclass
@@ -61,6 +62,11 @@ def time_unit(p: Params) -> Any:
     return jnp.sqrt(mass_ratio(p) * p.L / (p.k * p.g))
 
 
+def mass_speed_unit(p: Params) -> Any:
+    """``√(kgL/μ)`` (m/s): the internal mass's speed scale (stroke per time unit)."""
+    return jnp.sqrt(p.k * p.g * p.L / mass_ratio(p))
+
+
 def hold_acceleration(p: Params) -> Any:
     """``kg/μ`` (m/s²): the largest relative acceleration a resting body withstands."""
     return p.k * p.g / mass_ratio(p)
@@ -88,6 +94,7 @@ def rollout(p: Params, u: jax.Array, dt: Any, u_before: Any = 0.0, w0: Any = 0.0
 def periodic_speed(p: Params, u: jax.Array, dt: Any, periods: int = 3) -> jax.Array:
     """Average body speed (m/s) over the last of ``periods`` repetitions of the periodic gait ``u (N,)``
     (the body starting at rest, the mass moving at ``u[-1]`` as if a period had just ended)."""
+    periods = check_positive_int("periods", periods)
     n = u.shape[0]
     states = rollout(p, jnp.tile(u, periods), dt, u_before=u[-1])
     x_end, x_start = states[-1, 0], states[-n - 1, 0] if periods > 1 else 0.0
@@ -99,6 +106,7 @@ __all__ = [
     "mass_ratio",
     "speed_unit",
     "time_unit",
+    "mass_speed_unit",
     "hold_acceleration",
     "step",
     "rollout",

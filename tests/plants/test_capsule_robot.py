@@ -152,7 +152,7 @@ def test_resting_two_phase_family_against_the_plant_and_its_limit():
     event-exact family value; an instant return gives u1/(1 + u1²) for u1 ≤ 1 and 1/(2·u1) above
     (the back-slide then outlasts the forward phase), at most 1/2 at u1 = 1."""
     unit = float(cr.speed_unit(P))
-    scale = cg.natural_units(P)["mass_speed_unit"]
+    scale = float(cr.mass_speed_unit(P))
     tu = float(cr.time_unit(P))
     family = float(cg.resting_two_phase_speed(P, 1.0, 2.0)) / unit
     # natural units: back-slide stops at t = 1 = end of phase 1; the +3 jump slides 0.5 → w = 2.5;
@@ -169,7 +169,7 @@ def test_resting_two_phase_family_against_the_plant_and_its_limit():
 
 def test_symmetric_gait_without_rest_grows_without_bound():
     unit = float(cr.speed_unit(P))
-    scale = cg.natural_units(P)["mass_speed_unit"]
+    scale = float(cr.mass_speed_unit(P))
     v = [abs(float(cr.periodic_speed(P, *cg.symmetric_two_phase_gait(P, s * scale, 64), 1))) / unit for s in (1, 4)]
     assert v[1] > 3 * v[0] > 0
 
@@ -183,3 +183,12 @@ def test_without_friction_the_centre_of_mass_stays_put():
     states = cr.rollout(p, u, dt)
     xi = jnp.cumsum(u) * dt
     np.testing.assert_allclose(np.asarray(states[:, 0]), -float(cr.mass_ratio(p)) * np.asarray(xi), atol=1e-12)
+
+
+def test_bad_sizes_are_refused_by_name():
+    with pytest.raises(ValueError, match="n: must be even"):
+        cg.three_phase_gait(P, 63)
+    with pytest.raises(ValueError, match="n"):
+        cg.symmetric_two_phase_gait(P, 1.0, 0)
+    with pytest.raises(ValueError, match="periods"):
+        cr.periodic_speed(P, jnp.ones(4), 0.1, 0)
