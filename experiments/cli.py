@@ -17,10 +17,6 @@ programs are kept in ``$JAXSIM_CACHE_DIR`` (default ``~/.cache/jaxsim/jax``, und
 ``$XDG_CACHE_HOME`` if set), so a second run of a study skips most of its compilation.
 ``JAXSIM_CACHE_DIR=`` (empty) turns it off; a ``JAX_COMPILATION_CACHE_DIR`` set by the caller (the
 tests give each spawned CLI theirs) is respected when ``JAXSIM_CACHE_DIR`` is not set.
-
-Every command compiles with :data:`jaxsim.core.xla_flags.FAST_COMPILE` (XLA's CPU fusion emitters
-off: the TRMS gradient compiles in 3.7 s instead of 5.7 s); a value for the same flag already in
-``XLA_FLAGS`` wins.
 """
 
 from __future__ import annotations
@@ -39,14 +35,12 @@ from experiments.report import write_report
 from experiments.runner import as_study
 from experiments.sweep_command import add_parser as add_sweep_parser
 from experiments.sweep_command import run_sweep_command
-from jaxsim.core.xla_flags import FAST_COMPILE, add_xla_flags
 
 CACHE_HELP = (
     "JAX's persistent compilation cache is on: compiled programs are kept in $JAXSIM_CACHE_DIR "
     "(default ~/.cache/jaxsim/jax, or $XDG_CACHE_HOME/jaxsim/jax), so repeated runs skip most compilation; "
     "JAXSIM_CACHE_DIR= (empty) turns it off; without JAXSIM_CACHE_DIR, a JAX_COMPILATION_CACHE_DIR already "
-    "set in the environment is used instead. XLA compiles with --xla_cpu_use_fusion_emitters=false "
-    "(faster compilation) unless XLA_FLAGS sets that flag."
+    "set in the environment is used instead."
 )
 
 
@@ -132,7 +126,6 @@ def _list() -> int:
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
-    add_xla_flags(FAST_COMPILE)  # before JAX's first computation (XLA reads XLA_FLAGS once)
     enable_compilation_cache()
     try:
         if args.command == "sweep":  # first: --devices must act before JAX initialises

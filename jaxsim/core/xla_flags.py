@@ -1,16 +1,18 @@
-"""XLA flags that cut CPU compile time, and how to add them before JAX starts.
+"""XLA flags that cut CPU compile time for compile-bound work (tests, CI), and how to add them.
 
-Most of a study's or a test's time on a CPU is XLA compiling closed-loop rollouts.  Measured with
-``python -m experiments.benchmarks.compile_time`` and the suite (2-core CPU, jax 0.9.2):
+Most of a test's time on a CPU is XLA compiling closed-loop rollouts.  :data:`LOW_OPT` sets LLVM's
+lowest optimisation level: measured with ``python -m experiments.benchmarks.compile_time``-style
+programs (2-core CPU, jax 0.9.2), the TRMS loss compiles in 2.5 s instead of 2.9 s, its gradient
+4.7 s instead of 5.7 s and the AUV formation's gradient 8.8 s instead of 11.7 s, while each call
+runs 1.3–3.2× slower (TRMS loss 8 → 14 ms, AUV gradient 265 → 856 ms); ``pytest -n 2 tests/plants``
+takes 87 s instead of 104 s.  Results agree with the default build to rounding
+(``tests/core/test_xla_flags.py``).  The test suite uses it; the CLI does not (study runs are long
+enough for the slower code to cost more than the compile time saved).
 
-* :data:`FAST_COMPILE` — XLA's CPU *fusion emitters* off (the older loop emitter generates each
-  fusion): TRMS loss compile 2.9 → 2.6 s, its gradient 5.7 → 3.7 s, the PID gradient 0.55 → 0.22 s;
-  run times 8.2 → 5.5 ms, 53 → 50 ms, 0.8 → 0.7 ms, but the AUV formation's gradient runs 265 →
-  324 ms.  The CLI uses it (:func:`experiments.cli.main`).
-* :data:`FAST_COMPILE_LOW_OPT` — also LLVM's lowest optimisation level: compile roughly halves
-  (TRMS gradient 5.7 → 2.2 s, AUV gradient 11.7 → 6.0 s) while programs run 1.3–2.3× slower.  The
-  test suite uses it (compilation is most of its time; ``tests/plants`` 104 → 68 s); results agree
-  with the default build to ~1e-12 relative.
+Tried and not used: ``--xla_cpu_use_fusion_emitters=false`` (XLA's older loop emitter) compiles
+faster still (TRMS gradient 3.7 s, same run time) but duplicates shared subexpressions inside a
+fusion: the 37-input sorting network of :mod:`jaxsim.control.fuzzy` then takes more than 8 GB to
+compile (0.35 GB by default) — a test worker was killed for memory in a full run.
 
 XLA reads ``XLA_FLAGS`` once, when JAX creates its CPU backend (the first computation), so
 :func:`add_xla_flags` must run before that; afterwards it changes nothing in this process (child
@@ -22,11 +24,8 @@ from __future__ import annotations
 import os
 from collections.abc import MutableMapping
 
-FAST_COMPILE: tuple[str, ...] = ("--xla_cpu_use_fusion_emitters=false",)
-"""Compile faster at about the same run time (see the module docstring for measurements)."""
-
-FAST_COMPILE_LOW_OPT: tuple[str, ...] = FAST_COMPILE + ("--xla_backend_optimization_level=0",)
-"""Compile about twice as fast; programs run 1.3–2.3× slower (for compile-bound work: tests)."""
+LOW_OPT: tuple[str, ...] = ("--xla_backend_optimization_level=0",)
+"""Compile faster; compiled programs run 1.3–3.2× slower (for compile-bound work: tests)."""
 
 
 def add_xla_flags(flags: tuple[str, ...] | list[str], environ: MutableMapping[str, str] | None = None) -> str:
