@@ -188,7 +188,7 @@ def test_without_friction_the_centre_of_mass_stays_put():
 def test_bad_sizes_are_refused_by_name():
     with pytest.raises(ValueError, match="n: must be even"):
         cg.three_phase_gait(P, 63)
-    with pytest.raises(ValueError, match="n"):
+    with pytest.raises(ValueError, match="n: must be a positive integer, got 0"):
         cg.symmetric_two_phase_gait(P, 1.0, 0)
-    with pytest.raises(ValueError, match="periods"):
+    with pytest.raises(ValueError, match="periods: must be a positive integer, got 0"):
         cr.periodic_speed(P, jnp.ones(4), 0.1, 0)
