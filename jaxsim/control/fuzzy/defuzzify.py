@@ -44,6 +44,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxsim.core.robust_extrema import max_along
+
 
 def clipped_points(grid: jax.Array, term_mf: jax.Array, levels: jax.Array) -> tuple[jax.Array, jax.Array]:
     """Points of ``max_t min(α_t, μ_t)`` with every cut point inserted (any term shapes).
@@ -66,8 +68,8 @@ def clipped_points(grid: jax.Array, term_mf: jax.Array, levels: jax.Array) -> tu
     pts = jnp.concatenate([x0[None, :], sort_along_first_axis(cut)[0]], axis=0)  # (T+1, N-1)
     # Every term, linearly interpolated inside each interval: (T, T+1, N-1).
     values = _interp_in_interval(pts[None], x0, x1, m0[:, None, :], m1[:, None, :])
-    mu = jnp.max(jnp.minimum(levels[:, None, None], values), axis=0)  # (T+1, N-1)
-    last = jnp.max(jnp.minimum(levels, term_mf[:, -1]))
+    mu = max_along(jnp.minimum(levels[:, None, None], values), 0)  # (T+1, N-1)
+    last = max_along(jnp.minimum(levels, term_mf[:, -1]), 0)
     xs = jnp.concatenate([pts.T.reshape(-1), grid[-1:]])
     mus = jnp.concatenate([mu.T.reshape(-1), last[None]])
     return xs, mus
@@ -169,7 +171,7 @@ def unimodal_cuts(grid: jax.Array, term_mf: jax.Array, levels: jax.Array) -> tup
     q = jnp.where(valid, x0 + (lv - m0) * (x1 - x0) / den, grid[0])
     q, k = sort_along_first_axis(q, k)
     values = _interp_in_interval(q[None], grid[k], grid[k + 1], term_mf[:, k], term_mf[:, k + 1])
-    return q, jnp.max(jnp.minimum(alpha, values), axis=0), k
+    return q, max_along(jnp.minimum(alpha, values), 0), k
 
 
 def clipped_points_unimodal(grid: jax.Array, term_mf: jax.Array, levels: jax.Array) -> tuple[jax.Array, jax.Array]:
@@ -180,7 +182,7 @@ def clipped_points_unimodal(grid: jax.Array, term_mf: jax.Array, levels: jax.Arr
     """
     n = grid.shape[0]
     q, mu_q, _ = unimodal_cuts(grid, term_mf, levels)
-    mu_g = jnp.max(jnp.minimum(levels[:, None], term_mf), axis=0)
+    mu_g = max_along(jnp.minimum(levels[:, None], term_mf), 0)
     # Merge: cut j goes to slot j + #(nodes ≤ q_j), node i to slot i + #(cuts < node i).
     m = q.shape[0]
     slot_q = jnp.arange(m) + jnp.searchsorted(grid, q, side="right")
@@ -204,7 +206,7 @@ def centroid_clipped_unimodal(
     node) and its interval's right node.
     """
     q, mu_q, k = unimodal_cuts(grid, term_mf, levels)
-    mu_g = jnp.max(jnp.minimum(levels[:, None], term_mf), axis=0)
+    mu_g = max_along(jnp.minimum(levels[:, None], term_mf), 0)
     x1, x2, y1, y2, dx, area = _segments(grid, mu_g)
     moment = dx / 6.0 * (y1 * (2.0 * x1 + x2) + y2 * (x1 + 2.0 * x2))
     left_node, right_node = grid[k], grid[k + 1]
