@@ -30,9 +30,10 @@ run: $(VENV)/.core
 	$(PY) -m experiments run linear_pid_accuracy --out $(OUT)
 
 # one worker per core; a test file stays on one worker so its compiled functions are reused;
-# the 25 slowest tests are listed at the end (the suite's time is mostly compilation)
+# the 25 slowest tests are listed at the end (the suite's time is mostly compilation); a worker that
+# crashes ends the run (pytest-xdist 3.8 hung after replacing a worker that segfaulted in XLA)
 test: $(VENV)/.test
-	$(PY) -m pytest -n auto --dist loadfile --durations=25
+	$(PY) -m pytest -n auto --dist loadfile --durations=25 --max-worker-restart=0
 
 # ruff lint and format check (configured in pyproject.toml)
 lint: $(VENV)/.test
