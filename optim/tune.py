@@ -276,17 +276,20 @@ def _initial_carry(
     return jax.tree_util.tree_map(lambda a: jnp.array(a, dtype=a.dtype), carry)
 
 
-def _best_of(best_f: Any, best_v: Any, best_m: Any, tol: float, feasible_first: bool) -> tuple[jax.Array, jax.Array]:
-    """The start whose kept point ranks first, and that point's loss (jnp: on the device or the host).
+def _best_of(
+    best_f: Any, best_v: Any, best_m: Any, tol: float, feasible_first: bool, xp: Any = jnp
+) -> tuple[jax.Array, jax.Array]:
+    """The start whose kept point ranks first, and that point's loss (``xp``: ``jnp`` inside the
+    compiled chunk, ``np`` on the host — host-side jnp would compile a handful of eager ops).
 
     With ``feasible_first`` (augmented Lagrangian), feasible finite points are ranked by the loss
     when there is one; otherwise every start by its merit."""
-    f, v, m = jnp.asarray(best_f), jnp.asarray(best_v), jnp.asarray(best_m)
+    f, v, m = xp.asarray(best_f), xp.asarray(best_v), xp.asarray(best_m)
     cand = m
     if feasible_first:
         feasible = v <= tol
-        cand = jnp.where(jnp.any(feasible & jnp.isfinite(f)), jnp.where(feasible, f, jnp.inf), m)
-    i = jnp.argmin(cand)
+        cand = xp.where(xp.any(feasible & xp.isfinite(f)), xp.where(feasible, f, xp.inf), m)
+    i = xp.argmin(cand)
     return i, f[i]
 
 
@@ -524,6 +527,9 @@ def gradient_tuner(
             "chunk": jax.jit(_make_chunk(one, cfg, steps_per_call)),
             "trial_is_gradient": _trial_is_gradient(opt, u_template),
             "executables": {},
+            # one compilation each instead of one eager op per transform on every new process
+            "to_u": jax.jit(lambda x: invert(r.reparam, x)),
+            "to_x": jax.jit(lambda u: apply(r.reparam, u)),
         }
 
     static = (cfg._replace(sims_per_eval=0), n_starts, m_constraints, steps_per_call, _u_avals(u_template))
@@ -536,7 +542,7 @@ def gradient_tuner(
         x0 = template if params0 is None else _as_float_tree(params0)
         check_finite("params0", x0)
         check_domain(r.reparam, x0, "params0")
-        u0 = invert(r.reparam, x0)
+        u0 = built["to_u"](x0)
         check_finite("params0 (in unconstrained space)", u0)
         u0 = jax.tree_util.tree_map(lambda a, t: jnp.asarray(a, t.dtype), u0, u_template)
         k = jax.random.PRNGKey(0) if key is None else key
@@ -553,8 +559,7 @@ def gradient_tuner(
 
     def best(state: TunerState) -> tuple[Any, float, int]:
         idx, best_loss = _best_index_and_loss(state, cfg.tol, cfg.al)
-        u = jax.tree_util.tree_map(lambda a: a[idx], state.best_u)
-        return apply(r.reparam, u), best_loss, idx
+        return built["to_x"](_start(state.best_u, idx)), best_loss, idx
 
     return Tuner(
         init, built["step"], best, cfg, r.reparam, n_starts, built["chunk"], steps_per_call,
@@ -890,9 +895,9 @@ def tune(
     )
     history = _history(rec)
     converged, message = _convergence(carry, history, idx, cfg, reason, by_callback, len(rec.f))
-    best_u = jax.tree_util.tree_map(lambda a: a[idx], carry.best_u)
+    params, _, _ = tuner.best(carry)
     return TuneResult(
-        params=apply(tuner.reparam, best_u),
+        params=params,
         loss=float(best_loss),
         history=history,
         n_sims=int(round(rec.sims[-1])),
@@ -901,7 +906,7 @@ def tune(
         converged=converged,
         message=message + _non_finite_note(carry, history, idx, best_loss),
         start_index=int(idx),
-        u=best_u,
+        u=_start(carry.best_u, idx),
         constraint_violation=float(np.asarray(carry.best_v)[idx])
         if cfg.al or constraints is not None or (isinstance(loss, Problem) and loss.constraints is not None)
         else 0.0,
@@ -916,7 +921,14 @@ def tune(
 _grad_cost = grad_cost  # ``tune``'s argument of the same name shadows the function
 
 
+def _start(tree: Any, idx: int) -> Any:
+    """Start ``idx`` of a pytree with a leading starts axis, indexed on the host (no eager device op)."""
+    return jax.tree_util.tree_map(lambda a: jnp.asarray(np.asarray(a)[idx]), tree)
+
+
 def _best_index_and_loss(carry: TunerState, tol: float, feasible_first: bool) -> tuple[int, float]:
     """The start whose kept point ranks first, and that point's loss (host side)."""
-    i, f = _best_of(np.asarray(carry.best_f), np.asarray(carry.best_v), np.asarray(carry.best_m), tol, feasible_first)
+    i, f = _best_of(
+        np.asarray(carry.best_f), np.asarray(carry.best_v), np.asarray(carry.best_m), tol, feasible_first, xp=np
+    )
     return int(i), float(f)
