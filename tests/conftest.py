@@ -10,8 +10,9 @@ The suite compiles with XLA's default flags.  Tried for speed and rejected (fres
 ``--xla_cpu_use_fusion_emitters=false`` (compiles 11–60 % faster, but XLA's older loop emitter needs
 > 8 GB to compile the 37-input sorting network of :mod:`jaxsim.control.fuzzy`, 0.35 GB by default: a
 worker was OOM-killed); ``--xla_backend_optimization_level=0`` alone (pytest 32:33 → 30:20 on a quiet machine, but the
-fuzzy-PID studies' losses become non-finite at their start and the Misra1a Levenberg–Marquardt run
-stops without its convergence flag — the code is not yet robust to that build's rounding).
+Misra1a Levenberg–Marquardt run stops without its convergence flag, and the fuzzy-PID studies' Mamdani
+gradients were non-finite — since fixed by :func:`jaxsim.core.robust_extrema.max_along` and tested at
+that level in ``tests/control/fuzzy/test_gradient_under_other_rounding.py``).
 """
 
 from __future__ import annotations

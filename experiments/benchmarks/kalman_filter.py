@@ -11,8 +11,8 @@ Two scenarios:
   does not depend on the data, and ``vmap`` leaves it unbatched — JAX computes it once per step
   for all runs (dynamax's ``vmap`` gets the same benefit); :mod:`jaxsim.estimation.shared_gain`
   does it explicitly, and :func:`~jaxsim.estimation.batched.batched_kalman_loglik` (the
-  ``ours_shared_gain`` rows) runs the covariances once per call and the means time-major with the runs
-  on the fast axis.  Rows: ours ``jit(vmap(kalman_filter))`` (Joseph form) and batched, in
+  ``ours_shared_gain`` rows) runs the covariances once per call and advances the means of all runs
+  8 steps per GEMM (affine block maps).  Rows: ours ``jit(vmap(kalman_filter))`` (Joseph form) and batched, in
   float64 and float32, and dynamax ``jit(vmap(lgssm_filter))`` (float64), all on every run in
   chunks of ``--chunk`` runs;
   a NumPy filter vectorised over runs (per-run covariance stacks) and its shared-gain twin;
@@ -133,8 +133,8 @@ def ours_per_run(model: LinearGaussianSSM):
 
 
 def ours_shared(model: LinearGaussianSSM, steps: int | None = None):
-    """:func:`~jaxsim.estimation.batched.batched_kalman_loglik`: covariances once per call, means
-    time-major with the runs on the fast axis (``steps`` unused: kept for callers)."""
+    """:func:`~jaxsim.estimation.batched.batched_kalman_loglik`: covariances once per call, the means
+    of all runs 8 steps per GEMM (``steps`` unused: kept for callers)."""
     return jax.jit(lambda y: batched_kalman_loglik(model, y))
 
 
