@@ -31,7 +31,8 @@ run: $(VENV)/.core
 
 # one worker per core; a test file stays on one worker so its compiled functions are reused;
 # the 25 slowest tests are listed at the end (the suite's time is mostly compilation); a worker that
-# crashes ends the run (pytest-xdist 3.8 hung after replacing a worker that segfaulted in XLA)
+# crashes ends the run (pytest-xdist 3.8 hung after replacing a crashed worker; the crashes came from
+# the per-process memory-map limit, now kept away by tests/process_maps.py)
 test: $(VENV)/.test
 	$(PY) -m pytest -n auto --dist loadfile --durations=25 --max-worker-restart=0
 

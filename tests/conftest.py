@@ -49,6 +49,15 @@ def child_env(**extra: str) -> dict[str, str]:
 
 
 import jaxsim  # noqa: E402,F401  (precision set up in one place)
+from tests.process_maps import release_compiled_programs_if_maps_run_high  # noqa: E402
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _stay_under_the_map_limit():
+    """After each test file, empty the compilation caches if this worker's memory mappings run high
+    (see :mod:`tests.process_maps`: at Linux's limit XLA crashes while compiling)."""
+    yield
+    release_compiled_programs_if_maps_run_high()
 
 
 @pytest.fixture(autouse=True)
