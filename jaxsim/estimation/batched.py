@@ -24,6 +24,15 @@ sweep over noise scales — and returns each run's total log-likelihood ``(runs,
   about ``2(n + kp)²/k`` flops per run and step (100 for ``n = 4``, ``p = 2``, ``k = 8``) — more than
   the step-by-step ``2p(2n + p) + 2n²``, but at GEMM speed instead of one tiny fused loop per step.
   Memory: ``(n + kp)²/k`` numbers per step for the maps.
+* **Steady gain** (shared, constant ``F, H, Q, R``, no mask, no inputs, ``T ≥ 2·``:data:`STEADY_AFTER`):
+  the covariance recursion of a detectable model converges to the Riccati fixed point — for the
+  benchmark's constant-velocity model it stops changing in float64 after about 50 steps — after which
+  every step has the same gain and every block the same map.  The recursion runs :data:`STEADY_AFTER`
+  steps (rounded up to whole blocks) and tests ``max|P_h − P_{h−1}| ≤`` :data:`STEADY_TOL` ``· eps ·
+  max|P_h|`` on the predicted covariance; if it passes, steps from ``h`` on use step ``h``'s gain and
+  one shared block map (``lax.cond``: no host sync, differentiable), otherwise the gain-per-step path
+  runs from scratch.  The results equal the per-step path's to rounding (tested against the serial
+  filter, and for a slowly converging model that takes the fallback).
 * **Per-run noise scales** (``r_scale``/``q_scale``, shape ``(runs,)``: run ``i`` uses ``R·r_scale[i]``
   and ``Q·q_scale[i]``): every run needs its own gain, so the covariance recursion is batched too,
   with the runs on the fast axis.  The update is the Joseph form written out,
@@ -66,6 +75,9 @@ from jaxsim.precision import to_common_float
 
 DEFAULT_BLOCK = 25  # steps per transposed block, per-run covariances
 SHARED_BLOCK = 8  # steps per affine map, shared model (measured best of 2–25 at 100–10,000 runs)
+GAIN_UNROLL = 4  # covariance-recursion scan unrolled: its loop overhead dominates 1000 tiny steps
+STEADY_AFTER = 128  # shared constant model: steps of covariance recursion before the fixed-point test
+STEADY_TOL = 4  # ... which passes when max|P_head − P_head−1| ≤ STEADY_TOL · eps · max|P_head| (predicted P)
 
 
 def batched_kalman_loglik(
@@ -94,9 +106,10 @@ def batched_kalman_loglik(
 
     Returns:
         ``(runs,)`` log-likelihoods, equal to ``kalman_filter(model_i, ys[i], u, mask=mask).log_likelihood``
-        to rounding.  Without scales the covariance recursion runs once for all runs; with scales it
-        runs batched (see the module docstring).  The model, ``ys``, ``u`` and the scales are cast to one
-        float dtype (float64 unless all are float32).
+        to rounding.  Without scales the covariance recursion runs once for all runs (for a constant
+        model only until its fixed point); with scales it runs batched (see the module docstring).
+        The model, ``ys``, ``u`` and the scales are cast to one float dtype (float64 unless all are
+        float32).
     """
     ys = jnp.asarray(ys)
     check_shape("ys", ys, (None, None, None))
@@ -256,15 +269,21 @@ def _masked_noise(R: jax.Array, m_t: jax.Array) -> jax.Array:
 # --- shared model: covariances once, means batched ------------------------------------------------
 
 
-def _gain_sequence(model: LinearGaussianSSM, m: jax.Array, masked: bool) -> tuple[jax.Array, jax.Array, jax.Array]:
-    """One unbatched covariance recursion: per step the gain ``K (T, n, p)``, the whitening
-    ``W = L_S⁻¹ (T, p, p)`` and ``−½(log det S + dof·log 2π) (T,)``.  Joseph form written out (see the
-    module docstring); masked components get zero ``H`` rows, decoupled noise and zero ``W`` rows."""
+def _gain_sequence(
+    model: LinearGaussianSSM, m: jax.Array, masked: bool, with_covariances: bool = False, P0: jax.Array | None = None
+) -> tuple:
+    """One unbatched covariance recursion over the ``T = len(m)`` steps from the predicted covariance
+    ``P0`` (default ``model.P0``; a time-varying model starts at step 0): per step the gain ``K (T, n, p)``,
+    the whitening ``W = L_S⁻¹ (T, p, p)`` and ``−½(log det S + dof·log 2π) (T,)``; with
+    ``with_covariances`` also the predicted covariances ``P (T, n, n)`` the gains came from.  Joseph
+    form written out (see the module docstring); masked components get zero ``H`` rows, decoupled noise
+    and zero ``W`` rows."""
     mm = linalg.matmul
     p = model.n_outputs
     eye = jnp.eye(p, dtype=model.P0.dtype)
 
     def step(P, x):
+        P_prior = P
         H, R, F, Q, m_t = _at(model, "H", x), _at(model, "R", x), _at(model, "F", x), _at(model, "Q", x), x["m"]
         if masked:
             H, R = jnp.where(m_t[:, None], H, 0.0), _masked_noise(R, m_t)
@@ -279,10 +298,10 @@ def _gain_sequence(model: LinearGaussianSSM, m: jax.Array, masked: bool) -> tupl
         if masked:
             W = jnp.where(m_t[:, None], W, 0.0)
         log_norm = -(jnp.sum(jnp.log(jnp.diagonal(low))) + 0.5 * jnp.sum(m_t) * LOG_2PI)
-        return 0.5 * (P + P.T), (K, W, log_norm)
+        return 0.5 * (P + P.T), (K, W, log_norm, *((P_prior,) if with_covariances else ()))
 
     xs = dict(_varying(model, ("H", "R", "F", "Q")), m=m)
-    return jax.lax.scan(step, model.P0, xs, unroll=4)[1]  # loop overhead: 1000 tiny steps
+    return jax.lax.scan(step, model.P0 if P0 is None else P0, xs, unroll=GAIN_UNROLL)[1]
 
 
 def _affine_steps(model: LinearGaussianSSM, K: jax.Array, W: jax.Array, m: jax.Array, masked: bool):
@@ -318,42 +337,99 @@ def _block_map(A: jax.Array, G: jax.Array, C: jax.Array, W: jax.Array, b: jax.Ar
     return jnp.concatenate([*rows, T]).T, jnp.concatenate([*offsets, o])
 
 
+def _advance(carry: tuple, Mt: jax.Array, c: jax.Array, y: jax.Array, valid: int | None = None) -> tuple:
+    """All runs through one block map: one GEMM of ``[m, y] (runs, n + size·p)``; ``zᵀz`` summed per run
+    over the first ``valid`` innovation entries (default all: a zero-padded last block counts fewer)."""
+    mean, acc = carry
+    out = jnp.concatenate([mean, y], axis=1) @ Mt + c
+    z = out[:, : y.shape[1] if valid is None else valid]
+    return out[:, y.shape[1] :], acc + jnp.sum(z * z, axis=1)
+
+
+def _run_blocks(carry: tuple, flat: jax.Array, first: int, k: int, p: int, map_of: Callable) -> tuple:
+    """Advance every run from block ``first`` to the end of ``flat (runs, T·p)``, ``k`` steps per block;
+    ``map_of(i)`` gives block ``i``'s ``(Mᵀ, c)``.  A last partial block is zero-padded to ``k`` steps
+    and only its real innovations are counted (each map is causal: ``z_j`` depends on ``ỹ_0 … ỹ_j``)."""
+    width, n_blocks = k * p, flat.shape[1] // (k * p)
+    if n_blocks > first:
+
+        def body(i, c):
+            return _advance(c, *map_of(i), jax.lax.dynamic_slice_in_dim(flat, i * width, width, axis=1))
+
+        carry = jax.lax.fori_loop(first, n_blocks, body, carry)
+    rest = flat.shape[1] - n_blocks * width
+    if rest:
+        y = jnp.pad(flat[:, n_blocks * width :], ((0, 0), (0, width - rest)))
+        carry = _advance(carry, *map_of(n_blocks), y, valid=rest)
+    return carry
+
+
+def _maps(steps: tuple, bu: jax.Array | None, k: int) -> tuple[jax.Array, jax.Array]:
+    """The block maps of consecutive runs of ``k`` steps: ``(Mᵀ (blocks, …), c (blocks, …))``; a last
+    partial block is padded with copies of its last step (and zero inputs)."""
+    pad = -len(steps[0]) % k
+    if pad:
+        steps = tuple(jnp.concatenate([a, jnp.broadcast_to(a[-1], (pad, *a.shape[1:]))]) for a in steps)
+        bu = None if bu is None else jnp.pad(bu, ((0, pad), (0, 0)))
+    per_block = [a.reshape(-1, k, *a.shape[1:]) for a in steps]
+    b = None if bu is None else bu.reshape(-1, k, bu.shape[-1])
+    return jax.vmap(_block_map)(*per_block, b)
+
+
+def _steady_eligible(model: LinearGaussianSSM, masked: bool, bu: Any, n_steps: int, k: int) -> bool:
+    """A constant model without mask or inputs, long enough for the fixed-point test to pay off."""
+    constant = not any(is_time_varying(model, f) for f in ("F", "H", "R", "Q"))
+    return constant and not masked and bu is None and n_steps >= 2 * _steady_head(k)
+
+
+def _steady_head(k: int) -> int:
+    """Steps of covariance recursion before the fixed-point test: :data:`STEADY_AFTER` rounded up to
+    whole blocks of ``k``."""
+    return -(-STEADY_AFTER // k) * k
+
+
 @functools.partial(jax.jit, static_argnames=("block", "masked"))
 def _shared_loglik(model, ys, m, u, block, masked):
     runs, n_steps, p = ys.shape
-    n = model.n_states
-    K, W, log_norm = _gain_sequence(model, m, masked)
-    steps = _affine_steps(model, K, W, m, masked)
     bu = _input_drive(model, u)
     flat = ys.reshape(runs, n_steps * p)  # runs-major, as given: each block is a strided slice
     if masked:
         flat = jnp.where(m.reshape(1, -1), flat, 0.0)  # masked entries may hold NaN
     k = min(block, n_steps)
-    n_blocks, head = n_steps // k, (n_steps // k) * k
+    carry = (jnp.broadcast_to(model.m0, (runs, model.n_states)), jnp.zeros((runs,), ys.dtype))
+    if not _steady_eligible(model, masked, bu, n_steps, k):
+        log_norm, carry = _gain_per_step(model, flat, m, bu, carry, model.P0, 0, k, masked)
+        return log_norm - 0.5 * carry[1]
+    # the first `head` steps as usual (the covariance recursion one step further, for the test), and
+    # the map of a block of steps that all take step head's gain
+    head = _steady_head(k)
+    K, W, log_norm, P = _gain_sequence(model, m[: head + 1], False, with_covariances=True)
+    steps = _affine_steps(model, K, W, m[: head + 1], False)
+    steps = tuple(jnp.concatenate([a[:head], jnp.broadcast_to(a[head], (k, *a.shape[1:]))]) for a in steps)
+    Mts, cs = _maps(steps, None, k)
+    head_flat = flat[:, : head * p]
+    carry = _run_blocks(carry, head_flat, 0, k, p, lambda i: (Mts[i], cs[i]))
+    change = jnp.max(jnp.abs(P[head] - P[head - 1]))
+    fixed = change <= STEADY_TOL * jnp.finfo(P.dtype).eps * jnp.max(jnp.abs(P[head]))
+    b0 = head // k
+    rest_norm, carry = jax.lax.cond(
+        fixed,
+        lambda c: ((n_steps - head) * log_norm[head], _run_blocks(c, flat, b0, k, p, lambda i: (Mts[b0], cs[b0]))),
+        lambda c: _gain_per_step(model, flat, m, None, c, P[head], head, k, False),
+        carry,
+    )
+    return jnp.sum(log_norm[:head]) + rest_norm - 0.5 * carry[1]
 
-    def maps(lo: int, hi: int, size: int):  # the block maps of steps lo..hi, size steps each
-        per_block = [a[lo:hi].reshape(-1, size, *a.shape[1:]) for a in steps]
-        b = None if bu is None else bu[lo:hi].reshape(-1, size, n)
-        return jax.vmap(_block_map)(*per_block, b)
 
-    def advance(carry, Mt, c, y):  # y (runs, size·p): one GEMM for all runs and all steps of the block
-        mean, acc = carry
-        out = jnp.concatenate([mean, y], axis=1) @ Mt + c
-        z = out[:, : y.shape[1]]
-        return out[:, y.shape[1] :], acc + jnp.sum(z * z, axis=1)
-
-    carry = (jnp.broadcast_to(model.m0, (runs, n)), jnp.zeros((runs,), ys.dtype))
-    if n_blocks:
-        Mts, cs = maps(0, head, k)
-
-        def body(i, c):
-            return advance(c, Mts[i], cs[i], jax.lax.dynamic_slice_in_dim(flat, i * k * p, k * p, axis=1))
-
-        carry = jax.lax.fori_loop(0, n_blocks, body, carry)
-    if head < n_steps:
-        Mts, cs = maps(head, n_steps, n_steps - head)
-        carry = advance(carry, Mts[0], cs[0], flat[:, head * p :])
-    return jnp.sum(log_norm) - 0.5 * carry[1]
+def _gain_per_step(model, flat, m, bu, carry, P_first, first: int, k: int, masked: bool):
+    """Steps ``first … T − 1`` (``first`` a multiple of ``k``; ``first > 0`` only for a constant model)
+    with a gain and a block map for every step, from the predicted covariance ``P_first``.
+    Returns (their summed log-normalisers, the carry)."""
+    K, W, log_norm = _gain_sequence(model, m[first:], masked, P0=P_first)
+    steps = _affine_steps(model, K, W, m[first:], masked)
+    Mts, cs = _maps(steps, None if bu is None else bu[first:], k)
+    b0 = first // k
+    return jnp.sum(log_norm), _run_blocks(carry, flat, b0, k, model.n_outputs, lambda i: (Mts[i - b0], cs[i - b0]))
 
 
 # --- per-run noise scales: covariances batched too -------------------------------------------------

@@ -13,8 +13,8 @@ import pytest
 from dynamax.utils.utils import psd_solve
 
 from jaxsim.core.pytree import replace
-from jaxsim.estimation.batched import batched_kalman_loglik
-from jaxsim.estimation.lgssm import kalman_filter
+from jaxsim.estimation.batched import STEADY_AFTER, STEADY_TOL, _gain_sequence, batched_kalman_loglik
+from jaxsim.estimation.lgssm import kalman_filter, lgssm
 from tests.estimation.helpers import filterpy_kalman, random_model, random_time_varying
 
 RUNS, T = 5, 23  # T not a multiple of the block sizes used below: the tail block runs too
@@ -119,6 +119,58 @@ def test_float32_stays_float32():
     got = batched_kalman_loglik(model, ys.astype(np.float32))
     assert got.dtype == jnp.float32
     np.testing.assert_allclose(got, _serial(model, ys.astype(np.float32)), rtol=1e-4)
+
+
+LONG = 2 * STEADY_AFTER + 13  # long enough for the fixed-point test, and a tail block
+
+
+def _constant_velocity(q=0.1, r=1.0):
+    """Two axes of position/velocity, positions measured (the Kalman benchmark's model)."""
+    f1, q1 = np.array([[1.0, 1.0], [0.0, 1.0]]), q * np.array([[1 / 3, 1 / 2], [1 / 2, 1.0]])
+    h = np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0]])
+    F, Q, P0 = np.kron(np.eye(2), f1), np.kron(np.eye(2), q1), np.diag([100.0, 10.0] * 2)
+    return lgssm(F, Q, h, r * np.eye(2), np.zeros(4), P0)
+
+
+def _fixed_point_by_the_test(model) -> bool:
+    """What the kernel's test decides: the predicted covariance stopped changing by step STEADY_AFTER."""
+    P = np.asarray(_gain_sequence(model, jnp.ones((STEADY_AFTER + 1, model.n_outputs), bool), False, True)[3])
+    change = np.max(np.abs(P[-1] - P[-2]))
+    return bool(change <= STEADY_TOL * np.finfo(P.dtype).eps * np.max(np.abs(P[-1])))
+
+
+def test_steady_gain_after_the_fixed_point_equals_serial_filter():
+    """A constant model: steps past STEADY_AFTER share one gain and one block map; float64 and float32."""
+    model = _constant_velocity()
+    assert _fixed_point_by_the_test(model)
+    ys, _ = _data(15, model, runs=3, t=LONG)
+    np.testing.assert_allclose(batched_kalman_loglik(model, ys), _serial(model, ys), rtol=1e-12)
+    m32 = jax.tree_util.tree_map(lambda a: a.astype(jnp.float32), model)
+    got = batched_kalman_loglik(m32, ys.astype(np.float32))
+    assert got.dtype == jnp.float32
+    np.testing.assert_allclose(got, _serial(m32, ys.astype(np.float32)), rtol=1e-4)
+
+
+def test_slow_convergence_falls_back_to_a_gain_per_step():
+    """q/r = 1e-8: the covariance still shrinks at step STEADY_AFTER, so every step keeps its own gain."""
+    model = _constant_velocity(q=1e-8)
+    assert not _fixed_point_by_the_test(model)
+    ys, _ = _data(16, model, runs=3, t=LONG)
+    np.testing.assert_allclose(batched_kalman_loglik(model, ys), _serial(model, ys), rtol=1e-12)
+
+
+def test_derivative_through_the_fixed_point_test_equals_serial_filters():
+    """d/d log q of the total log-likelihood (forward mode, as the tuners use for few parameters)."""
+    model = _constant_velocity()
+    ys, _ = _data(17, model, runs=2, t=LONG)
+
+    def total(log_q, kernel):
+        return jnp.sum(kernel(replace(model, Q=model.Q * jnp.exp(log_q))))
+
+    batched = lambda m: batched_kalman_loglik(m, ys)  # noqa: E731
+    serial = lambda m: jax.vmap(lambda y: kalman_filter(m, y).log_likelihood)(jnp.asarray(ys))  # noqa: E731
+    d = [jax.jvp(lambda v: total(v, k), (0.3,), (1.0,))[1] for k in (batched, serial)]
+    np.testing.assert_allclose(d[0], d[1], rtol=1e-9)
 
 
 class TestBadInput:
