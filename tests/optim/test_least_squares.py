@@ -81,6 +81,22 @@ def test_a_second_call_compiles_nothing():
     second = levenberg_marquardt(rosenbrock, jnp.array([0.5, 0.5]), max_steps=7)
     assert mid == before + 1 and len(_COMPILED) == mid  # the same executable, another start
     assert first.n_steps <= 7 and second.n_steps <= 7
+
+
+def test_a_second_call_does_not_trace_the_residuals():
+    """A warm call runs compiled programs only: the residuals' Python (the shape probe, the solver's
+    trace) runs on the first call alone — it cost ~60 ms per call on the PID race problem."""
+    traced = []
+
+    def counted(b):
+        traced.append(1)
+        return misra(b)
+
+    first = levenberg_marquardt(counted, jnp.array([500.0, 1e-4]), max_steps=3)
+    n_first = len(traced)
+    second = levenberg_marquardt(counted, jnp.array([250.0, 5e-4]), max_steps=3)
+    assert n_first > 0 and len(traced) == n_first
+    assert second.loss != first.loss  # another start really ran
     clear_all()  # what the tuning race's cold runs do: every tuner cache emptied
     assert len(_COMPILED) == 0
 
