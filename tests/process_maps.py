@@ -6,8 +6,9 @@ thousands of programs.  Measured in a fresh-clone ``make test`` (2 workers): one
 mappings after 4 minutes, 57,000 after 22 and 65,340 after 25, and then died with a segmentation
 fault inside ``backend_compile_and_load`` — the intermittent CI crash of earlier runs, in whichever
 test compiled next.  A process filled to ``vm.max_map_count`` (65,530 by default) on purpose fails
-its next compilation the same way (``LLVM ERROR: Unable to allocate section memory``).  :func:`release_compiled_programs_if_maps_run_high` empties JAX's caches
-and the tuners' caches when the count passes a fraction of the limit.
+its next compilation the same way (``LLVM ERROR: Unable to allocate section memory``).
+:func:`release_compiled_programs_if_maps_run_high` empties JAX's caches and the tuners' caches when
+the count passes a fraction of the limit.
 """
 
 from __future__ import annotations

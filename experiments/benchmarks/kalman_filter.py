@@ -13,9 +13,9 @@ Two scenarios:
   does it explicitly, and :func:`~jaxsim.estimation.batched.batched_kalman_loglik` (the
   ``ours_shared_gain`` rows) runs the covariances once per call — only until they reach their
   fixed point (about 50 steps for this model; tested at step 128), after which every step shares
-  one gain — and advances the means of all runs 8 steps per GEMM (affine block maps).  Rows: ours ``jit(vmap(kalman_filter))`` (Joseph form) and batched, in
-  float64 and float32, and dynamax ``jit(vmap(lgssm_filter))`` (float64), all on every run in
-  chunks of ``--chunk`` runs;
+  one gain — and advances the means of all runs 8 steps per GEMM (affine block maps).  Rows: ours
+  ``jit(vmap(kalman_filter))`` (Joseph form) and batched, in float64 and float32, and dynamax
+  ``jit(vmap(lgssm_filter))`` (float64), all on every run in chunks of ``--chunk`` runs;
   a NumPy filter vectorised over runs (per-run covariance stacks) and its shared-gain twin;
   FilterPy's ``KalmanFilter`` in a Python loop.
 * ``per_run_model``: run ``i`` uses ``R·sᵢ`` (``sᵢ`` log-uniform in [0.5, 2]), so every run carries
