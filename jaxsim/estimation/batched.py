@@ -31,7 +31,7 @@ sweep over noise scales — and returns each run's total log-likelihood ``(runs,
   steps (rounded up to whole blocks) and tests ``max|P_h − P_{h−1}| ≤`` :data:`STEADY_TOL` ``· eps ·
   max|P_h|`` on the predicted covariance; if it passes, steps from ``h`` on use step ``h``'s gain and
   one shared block map (``lax.cond``: no host sync, differentiable), otherwise the gain-per-step path
-  runs from scratch.  The results equal the per-step path's to rounding (tested against the serial
+  goes on from step ``h``.  The results equal the per-step path's to rounding (tested against the serial
   filter, and for a slowly converging model that takes the fallback).
 * **Per-run noise scales** (``r_scale``/``q_scale``, shape ``(runs,)``: run ``i`` uses ``R·r_scale[i]``
   and ``Q·q_scale[i]``): every run needs its own gain, so the covariance recursion is batched too,
@@ -346,17 +346,23 @@ def _advance(carry: tuple, Mt: jax.Array, c: jax.Array, y: jax.Array, valid: int
     return out[:, y.shape[1] :], acc + jnp.sum(z * z, axis=1)
 
 
-def _run_blocks(carry: tuple, flat: jax.Array, first: int, k: int, p: int, map_of: Callable) -> tuple:
-    """Advance every run from block ``first`` to the end of ``flat (runs, T·p)``, ``k`` steps per block;
-    ``map_of(i)`` gives block ``i``'s ``(Mᵀ, c)``.  A last partial block is zero-padded to ``k`` steps
-    and only its real innovations are counted (each map is causal: ``z_j`` depends on ``ỹ_0 … ỹ_j``)."""
+def _run_blocks(
+    carry: tuple, flat: jax.Array, first: int, k: int, p: int, map_of: Callable, stop: int | None = None
+) -> tuple:
+    """Advance every run through blocks ``first … stop − 1`` of ``flat (runs, T·p)`` (``stop=None``: to
+    the end), ``k`` steps per block; ``map_of(i)`` gives block ``i``'s ``(Mᵀ, c)``.  At the end, a last
+    partial block is zero-padded to ``k`` steps and only its real innovations are counted (each map is
+    causal: ``z_j`` depends on ``ỹ_0 … ỹ_j``)."""
     width, n_blocks = k * p, flat.shape[1] // (k * p)
-    if n_blocks > first:
+    last = n_blocks if stop is None else stop
+    if last > first:
 
         def body(i, c):
             return _advance(c, *map_of(i), jax.lax.dynamic_slice_in_dim(flat, i * width, width, axis=1))
 
-        carry = jax.lax.fori_loop(first, n_blocks, body, carry)
+        carry = jax.lax.fori_loop(first, last, body, carry)
+    if stop is not None:
+        return carry
     rest = flat.shape[1] - n_blocks * width
     if rest:
         y = jnp.pad(flat[:, n_blocks * width :], ((0, 0), (0, width - rest)))
@@ -407,11 +413,10 @@ def _shared_loglik(model, ys, m, u, block, masked):
     steps = _affine_steps(model, K, W, m[: head + 1], False)
     steps = tuple(jnp.concatenate([a[:head], jnp.broadcast_to(a[head], (k, *a.shape[1:]))]) for a in steps)
     Mts, cs = _maps(steps, None, k)
-    head_flat = flat[:, : head * p]
-    carry = _run_blocks(carry, head_flat, 0, k, p, lambda i: (Mts[i], cs[i]))
+    b0 = head // k
+    carry = _run_blocks(carry, flat, 0, k, p, lambda i: (Mts[i], cs[i]), stop=b0)
     change = jnp.max(jnp.abs(P[head] - P[head - 1]))
     fixed = change <= STEADY_TOL * jnp.finfo(P.dtype).eps * jnp.max(jnp.abs(P[head]))
-    b0 = head // k
     rest_norm, carry = jax.lax.cond(
         fixed,
         lambda c: ((n_steps - head) * log_norm[head], _run_blocks(c, flat, b0, k, p, lambda i: (Mts[b0], cs[b0]))),
