@@ -388,6 +388,13 @@ def _steady_eligible(model: LinearGaussianSSM, masked: bool, bu: Any, n_steps: i
     return constant and not masked and bu is None and n_steps >= 2 * _steady_head(k)
 
 
+def reached_fixed_point(P_before: jax.Array, P: jax.Array) -> jax.Array:
+    """The fixed-point test on two consecutive predicted covariances: ``max|P − P_before| ≤``
+    :data:`STEADY_TOL` ``· eps · max|P|`` (a boolean scalar, traceable)."""
+    change = jnp.max(jnp.abs(P - P_before))
+    return change <= STEADY_TOL * jnp.finfo(P.dtype).eps * jnp.max(jnp.abs(P))
+
+
 def _steady_head(k: int) -> int:
     """Steps of covariance recursion before the fixed-point test: :data:`STEADY_AFTER` rounded up to
     whole blocks of ``k``."""
@@ -415,10 +422,8 @@ def _shared_loglik(model, ys, m, u, block, masked):
     Mts, cs = _maps(steps, None, k)
     b0 = head // k
     carry = _run_blocks(carry, flat, 0, k, p, lambda i: (Mts[i], cs[i]), stop=b0)
-    change = jnp.max(jnp.abs(P[head] - P[head - 1]))
-    fixed = change <= STEADY_TOL * jnp.finfo(P.dtype).eps * jnp.max(jnp.abs(P[head]))
     rest_norm, carry = jax.lax.cond(
-        fixed,
+        reached_fixed_point(P[head - 1], P[head]),
         lambda c: ((n_steps - head) * log_norm[head], _run_blocks(c, flat, b0, k, p, lambda i: (Mts[b0], cs[b0]))),
         lambda c: _gain_per_step(model, flat, m, None, c, P[head], head, k, False),
         carry,

@@ -13,7 +13,7 @@ import pytest
 from dynamax.utils.utils import psd_solve
 
 from jaxsim.core.pytree import replace
-from jaxsim.estimation.batched import STEADY_AFTER, STEADY_TOL, _gain_sequence, batched_kalman_loglik
+from jaxsim.estimation.batched import STEADY_AFTER, _gain_sequence, batched_kalman_loglik, reached_fixed_point
 from jaxsim.estimation.lgssm import kalman_filter, lgssm
 from tests.estimation.helpers import filterpy_kalman, random_model, random_time_varying
 
@@ -134,9 +134,8 @@ def _constant_velocity(q=0.1, r=1.0):
 
 def _fixed_point_by_the_test(model) -> bool:
     """What the kernel's test decides: the predicted covariance stopped changing by step STEADY_AFTER."""
-    P = np.asarray(_gain_sequence(model, jnp.ones((STEADY_AFTER + 1, model.n_outputs), bool), False, True)[3])
-    change = np.max(np.abs(P[-1] - P[-2]))
-    return bool(change <= STEADY_TOL * np.finfo(P.dtype).eps * np.max(np.abs(P[-1])))
+    P = _gain_sequence(model, jnp.ones((STEADY_AFTER + 1, model.n_outputs), bool), False, True)[3]
+    return bool(reached_fixed_point(P[-2], P[-1]))
 
 
 def test_steady_gain_after_the_fixed_point_equals_serial_filter():
