@@ -14,10 +14,16 @@ Sub-packages:
 * :mod:`jaxsim.problem` — a tuning or robustness question as one object (parameter space,
   closed-loop builder, running-cost objective, uncertainty), shared by tuners, Monte Carlo and envs.
 
-Importing the package enables float64 (see :mod:`jaxsim.precision`).
+Importing the package enables float64 (see :mod:`jaxsim.precision`) and lets XLA's CPU backend
+compile a small time loop as one function (see :mod:`jaxsim.xla_flags`; import jaxsim before the
+first JAX computation of a process).
 """
 
-from jaxsim.precision import enable_x64_from_env as _enable_x64_from_env
+from jaxsim.xla_flags import compile_small_loops_whole as _compile_small_loops_whole
+
+_compile_small_loops_whole()
+
+from jaxsim.precision import enable_x64_from_env as _enable_x64_from_env  # noqa: E402
 
 _enable_x64_from_env()
 
