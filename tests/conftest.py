@@ -6,7 +6,8 @@ its 764 entries, and writing an entry once crashed a worker in CI (a segmentatio
 ``executable.serialize()``, jax 0.9.2).  For repeated local runs,
 ``JAXSIM_TEST_CACHE=.jax_cache make test`` reuses what the last run compiled.
 
-The suite compiles with XLA's default flags.  Tried for speed and rejected (fresh-clone runs, jax 0.9.2):
+The suite compiles with XLA's default flags plus the small-loop threshold that importing jaxsim adds
+(:mod:`jaxsim.xla_flags`).  Tried for speed and rejected (fresh-clone runs, jax 0.9.2):
 ``--xla_cpu_use_fusion_emitters=false`` (compiles 11–60 % faster, but XLA's older loop emitter needs
 > 8 GB to compile the 37-input sorting network of :mod:`jaxsim.control.fuzzy`, 0.35 GB by default: a
 worker was OOM-killed); ``--xla_backend_optimization_level=0`` alone (pytest 32:33 → 30:20 on a quiet machine, but the

@@ -5,7 +5,8 @@ XLA recomputes an elementwise operand in every fusion that reads it; built with
 entry equalled the max JAX's derivative of ``jnp.max`` divides by (0/0: the Fig. 2 Mamdani fit of
 ``fuzzy_pid_accuracy`` stopped with a non-finite gradient at ``e = 0.7``).  The defuzzifiers use
 :func:`jaxsim.core.robust_extrema.max_along`; this runs the fit's gradient in a child interpreter
-built that way and compares it with this process's (XLA's default flags)."""
+built that way and compares it with this process's (XLA's default flags plus the small-loop threshold
+of :mod:`jaxsim.xla_flags`, which the child gets too)."""
 
 import json
 import subprocess
