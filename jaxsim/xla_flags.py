@@ -32,7 +32,10 @@ _EXTRA_OPTIONS = "--xla_backend_extra_options"
 
 def with_small_loop_threshold(flags: str, n_bytes: int = SMALL_LOOP_BYTES) -> str:
     """``flags`` (an ``XLA_FLAGS`` string) with the small-loop threshold set to ``n_bytes``, unless
-    it already names one.  Merged into an existing ``--xla_backend_extra_options=k=v,...``."""
+    it already names one.  Merged into an existing ``--xla_backend_extra_options=k=v,...``.
+    ``n_bytes``: a non-negative integer (``0`` turns XLA's pass off), else ``ValueError``."""
+    if isinstance(n_bytes, bool) or not isinstance(n_bytes, int) or n_bytes < 0:
+        raise ValueError(f"n_bytes: must be a non-negative integer (bytes per loop iteration), got {n_bytes!r}")
     if SMALL_LOOP_OPTION in flags:
         return flags
     option = f"{SMALL_LOOP_OPTION}={n_bytes}"

@@ -20,6 +20,12 @@ def test_the_threshold_is_added_merged_or_left_as_the_user_gave_it():
     assert with_small_loop_threshold(mine, 65536) == mine
 
 
+@pytest.mark.parametrize("n_bytes", [-1, 65536.0, "65536", True])
+def test_a_threshold_that_is_not_a_non_negative_integer_is_refused(n_bytes):
+    with pytest.raises(ValueError, match="n_bytes: must be a non-negative integer"):
+        with_small_loop_threshold("", n_bytes)
+
+
 def test_this_process_runs_with_the_threshold():
     assert SMALL_LOOP_OPTION in os.environ["XLA_FLAGS"]
 
