@@ -8,8 +8,8 @@ lines 468–470) for a unit step, the loop of :class:`optim.problems.PIDTuning` 
 P and I on the error, filtered derivative on the measurement, ``substeps`` RK4 steps per period),
 ``J = ∫ e² + ρ u² dt`` over ``t_final`` as running costs ``ise + ρ·control_energy``, the gains in a
 box.  Tuners, each given ``budget`` simulations: ``gradient`` (Adam over the box's sigmoid
-reparametrisation, ``n_starts`` starts), ``gradient_lbfgs`` (L-BFGS with backtracking line search,
-stopped at gradient norm 1e-9), ``pso``, ``random``, ``grid`` (``⌊budget^{1/3}⌋`` points per gain),
+reparametrisation, ``n_starts`` starts), ``gradient_lbfgs`` (:func:`optim.lbfgs`: L-BFGS with a
+backtracking line search, each trial one evaluation; stopped at gradient norm 1e-9), ``pso``, ``random``, ``grid`` (``⌊budget^{1/3}⌋`` points per gain),
 and ``ipopt`` (:func:`optim.casadi_pid.ipopt_tune`, the same loss rebuilt in CasADi with its own
 RK4; it stops at its tolerance).  The IPOPT optimum is the reference every tuner's gap is measured
 to; the JAX and CasADi losses and gradients are compared at the start point.
@@ -23,13 +23,13 @@ from typing import Any, Callable
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optax
 
 from experiments import stages
 from experiments.runner import Study, StudyResult, paper_facts
 from jaxsim.core import costs
 from jaxsim.problem import Param, ParamSpace, Problem, Scenario
 from optim.casadi_pid import casadi_value_and_grad, ipopt_tune
+from optim.lbfgs import lbfgs as trial_lbfgs
 from optim.problems import GAIN_NAMES, PIDTuning
 from optim.tune import tune
 
@@ -89,7 +89,7 @@ def problem_of(cfg: Config) -> Problem:
 
 def own_tuners(cfg: Config, tuning: PIDTuning) -> dict[str, Any]:
     """The two tuners beyond the standard ones (L-BFGS, IPOPT), in table order with the standard ones."""
-    lbfgs = optax.lbfgs(linesearch=optax.scale_by_backtracking_linesearch(20))
+    lbfgs = trial_lbfgs(max_backtracking_steps=20)
 
     def ipopt(problem: Problem, budget: int):
         res = ipopt_tune(tuning, np.asarray(problem.space.init["gains"]), max_iter=budget, tol=1e-10)

@@ -31,6 +31,7 @@ from optim.compare import (
     standard_tuners,
 )
 from optim.hybrid import hybrid
+from optim.lbfgs import lbfgs
 from optim.least_squares import levenberg_marquardt
 from optim.problems import PIDTuning, rastrigin, rosenbrock, sphere
 from optim.pso import PSOConfig, SwarmState, pso, pso_init, pso_step
@@ -54,6 +55,7 @@ __all__ = [
     "standard_tuners",
     "cmaes",
     "hybrid",
+    "lbfgs",
     "levenberg_marquardt",
     "PIDTuning",
     "rastrigin",

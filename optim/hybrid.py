@@ -18,6 +18,7 @@ import optax
 
 from jaxsim.problem import Problem
 from jaxsim.problem.reparam import Interval
+from optim.lbfgs import lbfgs
 from optim.results import History, TuneResult, as_box
 
 GlobalPhase = Literal["pso", "cmaes"]
@@ -25,8 +26,8 @@ INSIDE = 1e-6  # fraction of the box a polishing start keeps from the bounds
 
 
 def default_polisher() -> optax.GradientTransformation:
-    """L-BFGS with a backtracking line search (at most 20 halvings), as the PID study uses it."""
-    return optax.lbfgs(linesearch=optax.scale_by_backtracking_linesearch(max_backtracking_steps=20))
+    """:func:`optim.lbfgs.lbfgs` with at most 20 step cuts per search, as the PID study uses it."""
+    return lbfgs(max_backtracking_steps=20)
 
 
 def _inside(z: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:

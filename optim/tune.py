@@ -73,6 +73,8 @@ from jaxsim.core.validation import check_finite
 from jaxsim.problem import Problem
 from jaxsim.problem.reparam import apply, check_domain, invert
 from optim.compile_cache import LRUCache, callable_key, key_or_none
+from optim.lbfgs import evaluates_trial, forget_reference, is_trial_linesearch
+from optim.lbfgs import lbfgs as trial_lbfgs
 from optim.results import History, TuneResult, check_int, check_number, check_some_loss_finite
 
 FORWARD_MODE_MAX_PARAMS = 32
@@ -214,19 +216,25 @@ def _make_step(objective: Callable, opt: optax.GradientTransformation, reparam: 
         running = c.alive & c.active
         better, improved = _ranking(f, viol, merit, c.best_f, c.best_v, c.best_m, cfg.tol, cfg.rtol, cfg.al)
         keep = running & finite & better
+        # optim.lbfgs's line-search trials are these evaluations: a non-finite trial is a rejected
+        # trial (the optimiser cuts the step), not the end of the start
+        trial_linesearch = is_trial_linesearch(c.opt_state)
+        trial = evaluates_trial(c.opt_state)
         if extra_args:
             updates, new_state = opt.update(
                 grad, c.opt_state, c.u, value=j, grad=grad, value_fn=lambda uu: objective(uu, c.lam)[0]
             )
         else:
             updates, new_state = opt.update(grad, c.opt_state, c.u)
-        move = running & finite
+        move = running & (finite | trial)
         lam = c.lam
         if cfg.al:
             due = (c.step + 1) % cfg.multiplier_every == 0
             lam = jnp.where(move & due, jnp.maximum(lam + cfg.w * g, 0.0), lam)
+            if trial_linesearch:  # the objective changed: the next trial cannot be compared with the anchor
+                new_state = _tree_where(move & due, forget_reference(new_state), new_state)
         since = jnp.where(keep & improved, 0, c.since_improve + 1)
-        active = c.active & ~(gnorm <= cfg.gtol)
+        active = c.active & ~(finite & (gnorm <= cfg.gtol))  # a NaN loss can come with a zero gradient
         if cfg.patience is not None:
             active = active & (since < cfg.patience)
         trials = optax.tree_utils.tree_get(new_state, "num_linesearch_steps", None) if extra_args else None
@@ -240,7 +248,7 @@ def _make_step(objective: Callable, opt: optax.GradientTransformation, reparam: 
             best_v=jnp.where(keep, viol, c.best_v),
             best_m=jnp.where(keep, merit, c.best_m),
             best_step=jnp.where(keep, c.step, c.best_step),
-            alive=c.alive & (finite | ~running),
+            alive=c.alive & (finite | ~running | trial),
             active=active,
             since_improve=since,
             step=c.step + 1,
@@ -418,9 +426,7 @@ def optimizer_for(method: Method | None, optimizer: Any) -> optax.GradientTransf
     if method == "lbfgs":
         # halving, not optax's default factor 0.8: 20 trials of 0.8 shrink the step only to 1 %, too
         # little on Rosenbrock's valley, where the search then fails and L-BFGS stalls
-        return optax.lbfgs(
-            linesearch=optax.scale_by_backtracking_linesearch(max_backtracking_steps=30, decrease_factor=0.5)
-        )
+        return trial_lbfgs(max_backtracking_steps=30, decrease_factor=0.5)
     raise ValueError(f"method: must be 'adam' or 'lbfgs', got {method!r}")
 
 

@@ -158,7 +158,9 @@ def build_problems(names: list[str], trms_t_final: float) -> dict[str, Problem]:
 
 # ------------------------------------------------------------------------------------------ tuners
 def lbfgs() -> optax.GradientTransformation:
-    return optax.lbfgs(linesearch=optax.scale_by_backtracking_linesearch(max_backtracking_steps=20))
+    from optim.lbfgs import lbfgs as trial_lbfgs
+
+    return trial_lbfgs(max_backtracking_steps=20)
 
 
 def tuner_runs(b: Budget) -> dict[str, Callable[[Problem, int], TuneResult]]:

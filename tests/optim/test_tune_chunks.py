@@ -106,7 +106,11 @@ def test_lbfgs_by_name_and_its_accounting():
     res = tune(rosen, jnp.array([-1.2, 1.0]), method="lbfgs", steps=200, gtol=1e-10, grad_cost=4.0)
     np.testing.assert_allclose(res.params, [1.0, 1.0], atol=1e-8)
     assert res.converged and res.n_steps < 100
-    # a gradient evaluation per step (4 loss evaluations), a backtracking trial is one loss evaluation
+    # optim.lbfgs: every step is one line-search trial, evaluated with its gradient (4 loss evaluations)
+    assert res.n_evals == res.n_steps and res.n_sims == 4 * res.n_steps
+    # optax's backtracking search: a gradient evaluation per step, a trial is one loss evaluation
+    optax_ls = optax.lbfgs(linesearch=optax.scale_by_backtracking_linesearch(30, decrease_factor=0.5))
+    res = tune(rosen, jnp.array([-1.2, 1.0]), optimizer=optax_ls, steps=20, grad_cost=4.0)
     trials = res.n_evals - res.n_steps
     assert trials > 0 and res.n_sims == 4 * res.n_steps + trials
     with pytest.raises(ValueError, match="method"):
