@@ -44,15 +44,18 @@ Accounting: a gradient evaluation (loss and gradient, in either mode) of a start
 counts ``grad_cost`` loss evaluations times ``sims_per_eval`` — by default ``grad_cost = 1`` (an
 evaluation is an evaluation: reproducible counts); ``grad_cost="measure"`` measures what one
 gradient evaluation costs in loss evaluations (:func:`grad_cost`, wall-clock, once per problem and
-cached), or pass the number; a line-search trial (``optax.lbfgs``) counts one loss evaluation for a
-backtracking search and ``grad_cost`` for optax's zoom search (its trials evaluate the gradient).
+cached), or pass the number; a line-search trial inside ``optax.lbfgs`` counts one loss evaluation
+for its backtracking search and ``grad_cost`` for its zoom search (its trials evaluate the
+gradient); :func:`optim.lbfgs.lbfgs`'s trials are the tuner's own steps, each one gradient evaluation.
 ``n_sims`` sums these (loss-evaluation equivalents, comparable with the swarm's and the
 searches'); ``n_evals`` counts the evaluations themselves.  ``wall_s`` is the stepping time; the
 setup (initial state, tracing, compilation, the ``grad_cost`` measurement) is ``compile_s``.
 
-Optimisers: any optax transformation; ``method="lbfgs"`` (optax L-BFGS with a backtracking line
-search) converges in far fewer loss evaluations than Adam on smooth deterministic losses (the PID
-problem: see the issue-18 measurements); Adam (``optax.adam(1e-2)``) stays the default, since
+Optimisers: any optax transformation; ``method="lbfgs"`` (:func:`optim.lbfgs.lbfgs`: L-BFGS with a
+backtracking line search whose trials are the tuner's steps, so the compiled step holds the loss
+once; a NaN/inf trial is cut like any failed trial, not the end of the start) converges in far
+fewer loss evaluations than Adam on smooth deterministic losses (the PID problem: see the issue-18
+measurements); Adam (``optax.adam(1e-2)``) stays the default, since
 L-BFGS's line search stalls on losses with kinks (saturations, ``|e|`` in ITAE) and on noisy ones.
 """
 
@@ -414,9 +417,9 @@ def use_forward_mode(n_params: int, n_starts: int = 1) -> bool:
 
 def optimizer_for(method: Method | None, optimizer: Any) -> optax.GradientTransformation:
     """The optimiser ``tune`` runs: ``optimizer`` if given, else the one ``method`` names
-    (``"adam"``: ``optax.adam(1e-2)``, the default; ``"lbfgs"``: ``optax.lbfgs`` with a
-    backtracking (Armijo) line search halving the step, at most 30 trials, each one loss
-    evaluation)."""
+    (``"adam"``: ``optax.adam(1e-2)``, the default; ``"lbfgs"``: :func:`optim.lbfgs.lbfgs`, a
+    backtracking (Armijo) line search halving the step, at most 30 cuts, each trial one step of
+    the tuner)."""
     if optimizer is not None:
         if method is not None:
             raise ValueError(f"method: give either method or optimizer, not both (method={method!r})")
@@ -425,7 +428,7 @@ def optimizer_for(method: Method | None, optimizer: Any) -> optax.GradientTransf
         return optax.adam(1e-2)
     if method == "lbfgs":
         # halving, not optax's default factor 0.8: 20 trials of 0.8 shrink the step only to 1 %, too
-        # little on Rosenbrock's valley, where the search then fails and L-BFGS stalls
+        # little on Rosenbrock's valley
         return trial_lbfgs(max_backtracking_steps=30, decrease_factor=0.5)
     raise ValueError(f"method: must be 'adam' or 'lbfgs', got {method!r}")
 
@@ -799,7 +802,8 @@ def tune(
         optimizer: any ``optax.GradientTransformation`` (default: the one ``method`` names); line-search
             optimisers (``optax.lbfgs``, a ``GradientTransformationExtraArgs``) receive ``value``,
             ``grad`` and ``value_fn``.
-        steps: maximum number of steps (gradient evaluations) per start.
+        steps: maximum number of steps (gradient evaluations) per start; with
+            :func:`optim.lbfgs.lbfgs` a step is one line-search trial.
         reparam: pytree of :mod:`jaxsim.problem.reparam` objects (a prefix of ``params0``); None:
             identity (a Problem: its space's).
         constraints: ``params -> g``; feasible iff every ``g ≤ 0``.
@@ -822,9 +826,9 @@ def tune(
             :data:`FORWARD_MODE_MAX_PARAMS`), ``"forward"`` or ``"reverse"`` gradient.
         progress: ``True`` for a tqdm bar (steps, best loss; updated once per chunk), or a bar
             factory (:mod:`jaxsim.core.progress`).
-        method: ``"adam"`` (``optax.adam(1e-2)``, the default) or ``"lbfgs"`` (``optax.lbfgs``
-            with a backtracking line search; for smooth deterministic losses), when ``optimizer``
-            is not given.
+        method: ``"adam"`` (``optax.adam(1e-2)``, the default) or ``"lbfgs"``
+            (:func:`optim.lbfgs.lbfgs`, for smooth deterministic losses), when ``optimizer`` is not
+            given.
         steps_per_call: steps run on the device per jitted call (one ``lax.scan``; the stopping
             rules are evaluated inside it and the host syncs once per chunk).  The result does not
             depend on it except through a callback's stop.
