@@ -12,7 +12,8 @@ Every tuner runs on the same :class:`~jaxsim.problem.Problem`, each problem in i
   horizon ``--trms-t-final`` (30 s: the study's quick preset).
 
 Tuners: ``adam`` (:func:`optim.tune`, 1 start), ``adam_x8`` (8 vmapped starts), ``lbfgs``
-(``optax.lbfgs`` with backtracking, skipped with its error if the current ``tune`` rejects it),
+(:func:`optim.lbfgs`: backtracking trials as the tuner's own steps), ``lbfgs_x8`` (the same from 8
+vmapped starts: start 0 the problem's initial point, the others spread around it),
 ``pso`` (:func:`optim.pso`), ``pyswarms`` (``GlobalBestPSO`` on the jitted batched loss), ``random``
 (:func:`optim.random_search`), ``cmaes`` (:func:`optim.cmaes.cmaes`) and ``hybrid``
 (:func:`optim.hybrid.hybrid`: a short swarm, then L-BFGS) and ``lm``
@@ -70,7 +71,7 @@ from optim.compile_cache import clear_all
 from optim.results import TuneResult
 
 TARGETS = (0.01, 0.001)
-TUNERS = ("adam", "adam_x8", "lbfgs", "lm", "pso", "pyswarms", "random", "cmaes", "hybrid")
+TUNERS = ("adam", "adam_x8", "lbfgs", "lbfgs_x8", "lm", "pso", "pyswarms", "random", "cmaes", "hybrid")
 PROBLEMS = ("pid", "fuzzy", "trms")
 
 
@@ -178,6 +179,9 @@ def tuner_runs(b: Budget) -> dict[str, Callable[[Problem, int], TuneResult]]:
             pb, optimizer=optax.adam(b.adam_lr), steps=b.adam_x8_steps, n_starts=8, key=key(s), init_spread=0.5
         ),
         "lbfgs": lambda pb, s: tune(pb, optimizer=lbfgs(), steps=b.lbfgs_steps, gtol=1e-9, patience=20),
+        "lbfgs_x8": lambda pb, s: tune(
+            pb, optimizer=lbfgs(), steps=b.lbfgs_steps, n_starts=8, key=key(s), init_spread=0.5, gtol=1e-9, patience=20
+        ),
         "pso": lambda pb, s: pso(pb, n_particles=b.particles, n_iters=b.iters, key=key(s)),
         "pyswarms": lambda pb, s: pyswarms_search(pb, b.particles, b.iters, seed=s),
         "random": lambda pb, s: random_search(pb, n=b.random_n, key=key(s), batch_size=min(256, b.random_n)),
