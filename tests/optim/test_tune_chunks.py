@@ -123,3 +123,22 @@ def test_lbfgs_by_name_and_its_accounting():
         tune(rosen, jnp.zeros(2), grad_cost="measured")
     with pytest.raises(ValueError, match="steps_per_call"):
         tune(rosen, jnp.zeros(2), steps_per_call=0)
+
+
+@pytest.mark.parametrize("method", ["adam", "lbfgs"])
+def test_a_single_start_steps_unbatched_like_a_batched_start(method):
+    """One start runs its step without ``vmap``; two identical starts (spread 0) run it vmapped:
+    the iterates agree to rounding."""
+
+    def loss(x):
+        def tick(s, _):
+            return 0.95 * s + 0.05 * jnp.tanh(x[:2] * s + x[2]), None
+
+        s, _ = jax.lax.scan(tick, jnp.ones(2), None, length=40)
+        return jnp.sum((s - 0.3) ** 2) + 0.01 * jnp.sum(x**2)
+
+    x0 = jnp.array([0.5, -0.2, 0.1])
+    one = tune(loss, x0, method=method, steps=25)
+    two = tune(loss, x0, method=method, steps=25, n_starts=2, init_spread=0.0)
+    np.testing.assert_allclose(one.history.loss, two.history.loss_per_start[:, 0], rtol=1e-12)
+    np.testing.assert_allclose(one.params, two.params, rtol=1e-10, atol=1e-14)
