@@ -9,9 +9,10 @@ P and I on the error, filtered derivative on the measurement, ``substeps`` RK4 s
 ``J = ∫ e² + ρ u² dt`` over ``t_final`` as running costs ``ise + ρ·control_energy``, the gains in a
 box.  Tuners, each given ``budget`` simulations: ``gradient`` (Adam over the box's sigmoid
 reparametrisation, ``n_starts`` starts), ``gradient_lbfgs`` (:func:`optim.lbfgs`: L-BFGS with a
-backtracking line search, each trial one evaluation; stopped at gradient norm 1e-9), ``pso``, ``random``, ``grid`` (``⌊budget^{1/3}⌋`` points per gain),
-and ``ipopt`` (:func:`optim.casadi_pid.ipopt_tune`, the same loss rebuilt in CasADi with its own
-RK4; it stops at its tolerance).  The IPOPT optimum is the reference every tuner's gap is measured
+backtracking line search, each trial one evaluation; stopped at gradient norm 1e-9), ``pso``,
+``random``, ``grid`` (``⌊budget^{1/3}⌋`` points per gain), and ``ipopt``
+(:func:`optim.casadi_pid.ipopt_tune`, the same loss rebuilt in CasADi with its own RK4; it stops at
+its tolerance).  The IPOPT optimum is the reference every tuner's gap is measured
 to; the JAX and CasADi losses and gradients are compared at the start point.
 """
 
