@@ -464,6 +464,17 @@ def _trial_is_gradient(opt: optax.GradientTransformation, u_template: Any) -> bo
 
 
 _TUNERS = LRUCache()
+_U_TEMPLATES = LRUCache()
+
+
+def _u_template(reparam: Any, template: Any) -> Any:
+    """Shapes and dtypes of ``invert(reparam, template)``, cached by the reparametrisation and the
+    template's shapes: tracing the inverse on every call was most of a warm ``tune`` call's host
+    time on a small problem (a few ms)."""
+    key = key_or_none("u_template", reparam, _u_avals(template))
+    return _U_TEMPLATES.get_or_build(key, lambda: jax.eval_shape(lambda x: invert(reparam, x), template))
+
+
 """Compiled tuners, keyed on (loss, optimiser, reparametrisation, constraints, settings, starts,
 chunk length, parameter shapes): a second ``tune`` with the same ones compiles nothing."""
 
@@ -522,7 +533,7 @@ def gradient_tuner(
     if not (hasattr(opt, "init") and hasattr(opt, "update")):
         raise ValueError(f"optimizer: must be an optax.GradientTransformation, got {type(opt).__name__}")
     template = _as_float_tree(r.params0)
-    u_template = jax.eval_shape(lambda x: invert(r.reparam, x), template)
+    u_template = _u_template(r.reparam, template)
     n_params = int(sum(np.prod(leaf.shape) for leaf in jax.tree_util.tree_leaves(u_template)))
     cfg = _Settings(
         w=check_number("penalty_weight", r.penalty_weight),
@@ -554,6 +565,7 @@ def gradient_tuner(
             # one compilation each instead of one eager op per transform on every new process
             "to_u": jax.jit(lambda x: invert(r.reparam, x)),
             "to_x": jax.jit(lambda u: apply(r.reparam, u)),
+            "key0": jax.random.PRNGKey(0),  # the default key, made once (an eager op per call otherwise)
         }
 
     static = (cfg._replace(sims_per_eval=0), n_starts, m_constraints, steps_per_call, _u_avals(u_template))
@@ -569,7 +581,7 @@ def gradient_tuner(
         u0 = built["to_u"](x0)
         check_finite("params0 (in unconstrained space)", u0)
         u0 = jax.tree_util.tree_map(lambda a, t: jnp.asarray(a, t.dtype), u0, u_template)
-        k = jax.random.PRNGKey(0) if key is None else key
+        k = built["key0"] if key is None else key
         return built["init"](k, u0, jnp.asarray(spread, ravel_pytree(u0)[0].dtype))
 
     def compiled(state: TunerState) -> Callable:

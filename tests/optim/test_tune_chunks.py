@@ -55,7 +55,8 @@ def _compile_messages(run):
             out = run()
     finally:
         logging.getLogger("jax").removeHandler(handler)
-    return out, [m for m in messages if m.startswith("Compiling")]
+    compiled = [m for m in messages if m.startswith("Compiling")]
+    return out, compiled, [m for m in messages if m.startswith("Finished tracing")]
 
 
 def test_a_second_call_traces_and_compiles_nothing():
@@ -69,15 +70,16 @@ def test_a_second_call_traces_and_compiles_nothing():
         # a fresh optimiser object with the same settings, as a caller writes it every time
         return tune(loss, jnp.zeros(3), optimizer=optax.adam(0.1), steps=40, n_starts=2)
 
-    first, compiled_first = _compile_messages(run)
+    first, compiled_first, _ = _compile_messages(run)
     n_traces = len(traces)
     assert n_traces > 0 and compiled_first
-    second, compiled_second = _compile_messages(run)
-    assert len(traces) == n_traces and compiled_second == []
+    second, compiled_second, traced_second = _compile_messages(run)
+    # nothing traced at all, not even the parameters' shapes (the reparametrisation's inverse)
+    assert len(traces) == n_traces and compiled_second == [] and traced_second == []
     assert second.compile_s < first.compile_s
     np.testing.assert_array_equal(second.params, first.params)
     # other optimiser settings: a new compilation
-    _, compiled_other = _compile_messages(lambda: tune(loss, jnp.zeros(3), optimizer=optax.adam(0.2), steps=5))
+    _, compiled_other, _ = _compile_messages(lambda: tune(loss, jnp.zeros(3), optimizer=optax.adam(0.2), steps=5))
     assert len(traces) > n_traces and compiled_other
 
 
