@@ -173,11 +173,12 @@ def _check_in(name: str, value: Any, ok: Callable[[float], bool], what: str) -> 
         raise ValueError(f"{name}: must be {what}, got {value!r}")
 
 
-def _find_state(opt_state: Any) -> TrialLinesearchState | None:
-    found: list[TrialLinesearchState] = []
+def find_state(opt_state: Any, state_type: type) -> Any:
+    """The first sub-state of type ``state_type`` in an optimiser state (any optax chain), or None."""
+    found: list[Any] = []
 
     def visit(x: Any) -> bool:
-        if isinstance(x, TrialLinesearchState):
+        if isinstance(x, state_type):
             found.append(x)
             return True
         return False
@@ -188,13 +189,13 @@ def _find_state(opt_state: Any) -> TrialLinesearchState | None:
 
 def is_trial_linesearch(opt_state: Any) -> bool:
     """Whether an optimiser state (any optax chain) holds a :func:`lbfgs` line search."""
-    return _find_state(opt_state) is not None
+    return find_state(opt_state, TrialLinesearchState) is not None
 
 
 def evaluates_trial(opt_state: Any) -> jax.Array:
     """Whether the point about to be evaluated with ``opt_state`` is a line-search trial (bool
     array), as opposed to the start itself; ``False`` for other optimisers."""
-    state = _find_state(opt_state)
+    state = find_state(opt_state, TrialLinesearchState)
     return jnp.asarray(False) if state is None else state.trials > 0
 
 

@@ -76,7 +76,7 @@ from jaxsim.core.validation import check_finite
 from jaxsim.problem import Problem
 from jaxsim.problem.reparam import apply, check_domain, invert
 from optim.compile_cache import LRUCache, callable_key, key_or_none
-from optim.lbfgs import evaluates_trial, forget_reference, is_trial_linesearch
+from optim.lbfgs import evaluates_trial, find_state, forget_reference, is_trial_linesearch
 from optim.lbfgs import lbfgs as trial_lbfgs
 from optim.results import History, TuneResult, check_int, check_number, check_some_loss_finite
 
@@ -451,19 +451,12 @@ def optimizer_for(method: Method | None, optimizer: Any) -> optax.GradientTransf
 def _trial_is_gradient(opt: optax.GradientTransformation, u_template: Any) -> bool:
     """Whether a line-search trial of ``opt`` costs a gradient (zoom) or one loss (backtracking)."""
     state = jax.eval_shape(opt.init, u_template)
-    found = []
-
-    def visit(x: Any) -> bool:
-        if isinstance(x, optax.ScaleByBacktrackingLinesearchState):
-            found.append(x)
-            return True
-        return False
-
-    jax.tree_util.tree_leaves(state, is_leaf=visit)
-    return not found
+    return find_state(state, optax.ScaleByBacktrackingLinesearchState) is None
 
 
 _TUNERS = LRUCache()
+"""Compiled tuners, keyed on (loss, optimiser, reparametrisation, constraints, settings, starts,
+chunk length, parameter shapes): a second ``tune`` with the same ones compiles nothing."""
 _U_TEMPLATES = LRUCache()
 
 
@@ -473,10 +466,6 @@ def _u_template(reparam: Any, template: Any) -> Any:
     time on a small problem (a few ms)."""
     key = key_or_none("u_template", reparam, _u_avals(template))
     return _U_TEMPLATES.get_or_build(key, lambda: jax.eval_shape(lambda x: invert(reparam, x), template))
-
-
-"""Compiled tuners, keyed on (loss, optimiser, reparametrisation, constraints, settings, starts,
-chunk length, parameter shapes): a second ``tune`` with the same ones compiles nothing."""
 
 
 def _u_avals(u_template: Any) -> tuple:
