@@ -32,7 +32,8 @@ loss; with ``"penalty"`` the penalised loss (the problem being solved); with
 ``"augmented_lagrangian"`` a point with total violation ``Σ max(0, g) ≤ constraint_tol`` beats any
 infeasible one, feasible points are ranked by the loss and infeasible ones by
 ``f + (w/2)Σ max(0, g)²``.  A start whose loss or gradient turns NaN/inf
-stops there (the others go on); the run stops when no start is left and says so in ``message``,
+stops there (the others go on; a line-search trial of :func:`optim.lbfgs.lbfgs` is the exception:
+the optimiser cuts the step instead); the run stops when no start is left and says so in ``message``,
 returning the best finite point.
 
 Gradients: ``mode="reverse"`` (``value_and_grad``) or ``"forward"`` (``jacfwd`` on the flattened
