@@ -44,7 +44,9 @@ Writes ``tuning_race.json`` (settings, machine load, every run, the summary), ``
 dashed) into ``--out``.
 
 Usage: ``python -m experiments.benchmarks.tuning_race [--quick] [--problems pid fuzzy trms]
-[--tuners ...] [--rounds 3] [--trms-t-final 30] [--out results/tuning_race]``
+[--tuners ...] [--rounds 3] [--trms-t-final 30] [--mode auto|forward|reverse|measure]
+[--out results/tuning_race]`` (``--mode``: the gradient tuners' AD mode, :func:`optim.tune`'s
+``mode``; with ``measure`` the cold call includes compiling and timing both modes)
 """
 
 from __future__ import annotations
@@ -164,8 +166,9 @@ def lbfgs() -> optax.GradientTransformation:
     return trial_lbfgs(max_backtracking_steps=20)
 
 
-def tuner_runs(b: Budget) -> dict[str, Callable[[Problem, int], TuneResult]]:
-    """name → ``run(problem, seed)``; only public arguments of each tuner."""
+def tuner_runs(b: Budget, mode: str = "auto") -> dict[str, Callable[[Problem, int], TuneResult]]:
+    """name → ``run(problem, seed)``; only public arguments of each tuner; ``mode``: the AD mode of
+    the gradient tuners (``adam*``, ``lbfgs*``, ``hybrid``'s polisher)."""
     from experiments.stages import pyswarms_search
     from optim import pso, random_search, tune
     from optim.cmaes import cmaes
@@ -174,13 +177,27 @@ def tuner_runs(b: Budget) -> dict[str, Callable[[Problem, int], TuneResult]]:
 
     key = jax.random.PRNGKey
     return {
-        "adam": lambda pb, s: tune(pb, optimizer=optax.adam(b.adam_lr), steps=b.adam_steps),
+        "adam": lambda pb, s: tune(pb, optimizer=optax.adam(b.adam_lr), steps=b.adam_steps, mode=mode),
         "adam_x8": lambda pb, s: tune(
-            pb, optimizer=optax.adam(b.adam_lr), steps=b.adam_x8_steps, n_starts=8, key=key(s), init_spread=0.5
+            pb,
+            optimizer=optax.adam(b.adam_lr),
+            steps=b.adam_x8_steps,
+            n_starts=8,
+            key=key(s),
+            init_spread=0.5,
+            mode=mode,
         ),
-        "lbfgs": lambda pb, s: tune(pb, optimizer=lbfgs(), steps=b.lbfgs_steps, gtol=1e-9, patience=20),
+        "lbfgs": lambda pb, s: tune(pb, optimizer=lbfgs(), steps=b.lbfgs_steps, gtol=1e-9, patience=20, mode=mode),
         "lbfgs_x8": lambda pb, s: tune(
-            pb, optimizer=lbfgs(), steps=b.lbfgs_steps, n_starts=8, key=key(s), init_spread=0.5, gtol=1e-9, patience=20
+            pb,
+            optimizer=lbfgs(),
+            steps=b.lbfgs_steps,
+            n_starts=8,
+            key=key(s),
+            init_spread=0.5,
+            gtol=1e-9,
+            patience=20,
+            mode=mode,
         ),
         "pso": lambda pb, s: pso(pb, n_particles=b.particles, n_iters=b.iters, key=key(s)),
         "pyswarms": lambda pb, s: pyswarms_search(pb, b.particles, b.iters, seed=s),
@@ -192,7 +209,7 @@ def tuner_runs(b: Budget) -> dict[str, Callable[[Problem, int], TuneResult]]:
             iters=b.hybrid_iters,
             key=key(s),
             steps=b.hybrid_steps,
-            tune_options=dict(gtol=1e-9, patience=20),
+            tune_options=dict(gtol=1e-9, patience=20, mode=mode),
         ),
         "lm": lambda pb, s: levenberg_marquardt(pb, max_steps=b.lbfgs_steps),
     }
@@ -254,13 +271,15 @@ def race(
     seed: int = 0,
     budgets: dict[str, Budget] | None = None,
     log: Callable[[str], Any] = print,
+    mode: str = "auto",
 ) -> list[dict[str, Any]]:
-    """Every (problem, round, tuner): a cold and a warm run, tuner order rotated per round."""
+    """Every (problem, round, tuner): a cold and a warm run, tuner order rotated per round
+    (``mode``: the gradient tuners' AD mode)."""
     budgets = BUDGETS if budgets is None else budgets
     records = []
     with persistent_cache_off():
         for name, pb in problems.items():
-            runs = tuner_runs(budgets.get(name, Budget()))
+            runs = tuner_runs(budgets.get(name, Budget()), mode)
             for r in range(rounds):
                 order = tuners[r % len(tuners) :] + tuners[: r % len(tuners)]
                 for t in order:
@@ -413,6 +432,12 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     ap.add_argument("--tuners", nargs="+", choices=TUNERS, default=None, help="default: all")
     ap.add_argument("--rounds", type=int, default=None, help="interleaved rounds (default 3; --quick: 1)")
     ap.add_argument("--trms-t-final", type=float, default=30.0, help="TRMS horizon, s (the study's quick: 30)")
+    ap.add_argument(
+        "--mode",
+        choices=["auto", "forward", "reverse", "measure"],
+        default="auto",
+        help="AD mode of the gradient tuners (optim.tune's mode; 'measure' times both on the first call)",
+    )
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--reference", type=float, nargs="*", default=None, help="best known loss per problem, in order")
     ap.add_argument("--out", default="results/tuning_race", help="folder for the JSON, CSV and PNG")
@@ -427,7 +452,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     load = os.getloadavg()
     print(f"tuning race: {problems} × {tuners}, {rounds} round(s); load average {load[0]:.2f} on {os.cpu_count()} cpus")
     built = build_problems(problems, args.trms_t_final)
-    records = race(built, tuners, rounds, args.seed, budgets)
+    records = race(built, tuners, rounds, args.seed, budgets, mode=args.mode)
     rows = summarise(records, reference)
     print(format_table(rows))
     settings = {
@@ -435,6 +460,7 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
         "tuners": tuners,
         "rounds": rounds,
         "seed": args.seed,
+        "mode": args.mode,
         "trms_t_final": args.trms_t_final,
         "quick": args.quick,
         "budgets": {k: dataclasses.asdict(budgets[k]) for k in problems},
