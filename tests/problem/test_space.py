@@ -96,3 +96,14 @@ def test_bad_use_of_a_space():
         SPACE.from_search(jnp.zeros(6))
     with pytest.raises(ValueError, match="params: missing e"):
         SPACE.to_search({k: v for k, v in SPACE.init.items() if k != "e"})
+
+
+def test_init_is_a_fresh_dict_of_the_declared_values_every_time():
+    space = ParamSpace(kp=Param(lo=0.1, hi=10.0, init=2.0), w=Param(lo=0.0, hi=5.0, init=np.array([1.0, 3.0])))
+    first = space.init
+    first["kp"] = jnp.asarray(99.0)  # a caller editing its copy
+    second = space.init
+    assert second is not first and set(second) == {"kp", "w"}
+    np.testing.assert_array_equal(second["kp"], 2.0)
+    np.testing.assert_array_equal(second["w"], [1.0, 3.0])
+    assert second["w"].dtype == jnp.float64
