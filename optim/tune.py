@@ -55,7 +55,8 @@ for its backtracking search and ``grad_cost`` for its zoom search (its trials ev
 gradient); :func:`optim.lbfgs.lbfgs`'s trials are the tuner's own steps, each one gradient evaluation.
 ``n_sims`` sums these (loss-evaluation equivalents, comparable with the swarm's and the
 searches'); ``n_evals`` counts the evaluations themselves.  ``wall_s`` is the stepping time; the
-setup (initial state, tracing, compilation, the ``grad_cost`` measurement) is ``compile_s``.
+setup (initial state, tracing, compilation, the ``grad_cost`` measurement, ``mode="measure"``'s
+timings) is ``compile_s``.
 
 Optimisers: any optax transformation; ``method="lbfgs"`` (:func:`optim.lbfgs.lbfgs`: L-BFGS with a
 backtracking line search whose trials are the tuner's steps, so the compiled step holds the loss
@@ -904,7 +905,8 @@ def tune(
         a backtracking line-search trial 1, a zoom line-search trial ``grad_cost`` — so it
         compares with the swarms' and searches' ``n_sims``; ``history.sims`` is its running sum.
         ``compile_s`` holds the setup: initial state, compilation (0 on a second call with the
-        same loss object, settings and shapes) and the ``grad_cost`` measurement.
+        same loss object, settings and shapes), the ``grad_cost`` measurement and, on a first call,
+        ``mode="measure"``'s second compilation and timings.
     """
     if callback is not None and not callable(callback):
         raise ValueError("callback: must be callable or None")
