@@ -42,9 +42,11 @@ unconstrained parameters × starts ≤ :data:`FORWARD_MODE_MAX_PARAMS`: the vmap
 forward mode's tangent lanes, not reverse mode's single adjoint pass.  The count cannot tell every
 loss: on the fuzzy-PID race loss (4 parameters) reverse mode is 3× faster, on the TRMS LQR loss
 (16) 2.6× (implicit Riccati derivatives: one adjoint solve against one tangent solve per lane).
-``"measure"`` compiles both and times one step of each from the initial state, then runs the
-faster — once per (loss, optimiser, settings, shapes), cached like the compiled steps: the first
-call pays a second compilation, later calls nothing; the choice is on ``TuneResult.mode``.
+``"measure"`` compiles the ``"auto"`` rule's mode and times one of its steps; when
+:data:`MEASURE_HORIZON_STEPS` such steps would cost at least its compilation, it compiles the other
+mode too, times both and runs the faster — once per (loss, optimiser, settings, shapes), cached like
+the compiled steps: the first call may pay a second compilation, later calls nothing; the choice is
+on ``TuneResult.mode``.
 
 Accounting: a gradient evaluation (loss and gradient, in either mode) of a start still running
 counts ``grad_cost`` loss evaluations times ``sims_per_eval`` — by default ``grad_cost = 1`` (an
@@ -465,29 +467,49 @@ _MODES = LRUCache(128)
 """``mode="measure"``'s choices, ``"forward"`` or ``"reverse"``, keyed like :data:`_TUNERS` less the mode."""
 
 
-def _faster_mode(candidate: Callable[[str], "Tuner"], rounds: int = 3) -> str:
-    """``mode="measure"``: compile the forward- and the reverse-mode chunk (the compiled chunks stay in
-    the tuner cache for the run that follows) and time one step of each from the initial state,
-    interleaved, the minimum over ``rounds`` (each averaging ≥ 5 ms of calls); the faster mode.  A
-    mode JAX cannot differentiate the loss in (reverse mode through a ``lax.while_loop``, forward
-    mode through a ``jax.custom_vjp``) is left out; if neither compiles, forward mode's error."""
-    tuners = {m: candidate(m) for m in ("forward", "reverse")}
-    state = tuners["forward"].init()
+MEASURE_HORIZON_STEPS = 1000
+"""``mode="measure"`` compiles the second mode only when this many steps of the first (the
+``"auto"`` rule's mode) would take at least as long as the first mode's compilation: below that,
+the other mode cannot repay its own compilation (on the PID problem a step costs 0.2 ms against
+about 1.5 s of compilation, and the two modes' steps tie)."""
+
+
+def _faster_mode(candidate: Callable[[str], "Tuner"], first: str, rounds: int = 3) -> str:
+    """``mode="measure"``: compile the ``first`` mode's chunk (it stays in the tuner cache for the run
+    that follows) and time one step of it from the initial state; if the step is dear enough
+    (:data:`MEASURE_HORIZON_STEPS`), compile the other mode too, time both interleaved, the minimum
+    over ``rounds`` (each averaging ≥ 5 ms of calls), and return the faster.  A mode JAX cannot
+    differentiate the loss in (reverse mode through a ``lax.while_loop``, forward mode through a
+    ``jax.custom_vjp``) is left out; if neither compiles, forward mode's error."""
+    other = "reverse" if first == "forward" else "forward"
+    tuners = {m: candidate(m) for m in (first, other)}
+    state = tuners[first].init()
     one = jnp.asarray(1, jnp.int32)
     exes, errors = {}, {}
-    for m, t in tuners.items():
+
+    def compile_mode(m: str) -> float:
+        t0 = time.perf_counter()
         try:
-            exes[m] = t.compiled(state)
+            exes[m] = tuners[m].compiled(state)
         except Exception as err:  # noqa: BLE001  (JAX's errors for an unsupported mode vary by type)
             errors[m] = err
+        return time.perf_counter() - t0
+
+    def step_time(m: str) -> float:
+        return _time_call(lambda s: exes[m](s, one), state)
+
+    compile_s = compile_mode(first)
+    if first in exes and MEASURE_HORIZON_STEPS * min(step_time(first) for _ in range(rounds)) < compile_s:
+        return first
+    compile_mode(other)
     if not exes:
         raise errors["forward"]
     if len(exes) == 1:
         return next(iter(exes))
     times: dict[str, list[float]] = {m: [] for m in exes}
     for _ in range(rounds):
-        for m, exe in exes.items():
-            times[m].append(_time_call(lambda s, exe=exe: exe(s, one), state))
+        for m in exes:
+            times[m].append(step_time(m))
     return min(times, key=lambda m: min(times[m]))
 
 
@@ -600,7 +622,8 @@ def gradient_tuner(
     if mode == "measure":
         mode_key = key_or_none("mode", *parts, (cfg._replace(sims_per_eval=0, use_forward=False), *static[1:]))
         candidate = lambda m: gradient_tuner(**{**arguments, "mode": m})  # noqa: E731
-        return candidate(_MODES.get_or_build(mode_key, lambda: _faster_mode(candidate)))
+        first = "forward" if use_forward_mode(n_params, n_starts) else "reverse"
+        return candidate(_MODES.get_or_build(mode_key, lambda: _faster_mode(candidate, first)))
     built = _TUNERS.get_or_build(key_or_none("tuner", *parts, static), build)
 
     def init(params0: Any = None, key: jax.Array | None = None) -> TunerState:
@@ -881,7 +904,8 @@ def tune(
         mode: ``"auto"`` (:func:`use_forward_mode`: forward mode while parameters × starts ≤
             :data:`FORWARD_MODE_MAX_PARAMS`), ``"forward"`` or ``"reverse"`` gradient, or
             ``"measure"``: the faster of the two, timed once per problem and settings (the first
-            call compiles both; the choice is cached and reported in ``TuneResult.mode``).
+            call compiles both where the steps are dear enough to repay it,
+            :data:`MEASURE_HORIZON_STEPS`; the choice is cached and reported in ``TuneResult.mode``).
         progress: ``True`` for a tqdm bar (steps, best loss; updated once per chunk), or a bar
             factory (:mod:`jaxsim.core.progress`).
         method: ``"adam"`` (``optax.adam(1e-2)``, the default) or ``"lbfgs"``

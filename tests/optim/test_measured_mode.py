@@ -1,5 +1,8 @@
-"""``mode="measure"``: the tuner times both AD modes once per problem and runs the faster; a mode
-JAX cannot differentiate the loss in is left out; a second call measures and compiles nothing."""
+"""``mode="measure"``: the tuner times the AD modes once per problem and runs the faster (the second
+mode compiled only when the first one's steps are dear); a mode JAX cannot differentiate the loss in
+is left out; a second call measures and compiles nothing."""
+
+import sys
 
 import jax
 import jax.numpy as jnp
@@ -55,26 +58,32 @@ def test_neither_mode_compiling_raises_the_loss_error():
         tune(loss, jnp.zeros(2), steps=2, mode="measure")
 
 
-def _many_gains(x):
-    """300 parameters through a 200-step recursion: forward mode pushes 300 tangent lanes through
-    every step, reverse mode one adjoint pass (about a hundred times less work)."""
+def _wide(x):
+    """30 parameters (``"auto"``: forward mode) spread over a 3,840-wide state through a 100-step
+    recursion: forward mode pushes 30 tangent lanes through every wide step, reverse mode one adjoint
+    pass — reverse is several times faster and a forward step is dear enough to measure."""
+    v = jnp.repeat(x, 128)
 
     def step(y, k):
-        y = jnp.tanh(y + 0.01 * x * jnp.sin(0.1 * k))
-        return y, jnp.sum(y**2)
+        y = jnp.tanh(y + 0.01 * v * jnp.sin(0.1 * k))
+        return y, jnp.mean(y**2)
 
-    _, costs = jax.lax.scan(step, jnp.zeros_like(x), jnp.arange(200.0))
+    _, costs = jax.lax.scan(step, jnp.zeros_like(v), jnp.arange(100.0))
     return jnp.sum(costs) + jnp.sum((x - 1.0) ** 2)
 
 
-def test_measure_picks_reverse_mode_for_many_parameters_and_matches_it():
-    opts = dict(optimizer=optax.adam(0.05), steps=30, n_starts=1)
-    x0 = jnp.zeros(300)
-    measured, compiled_first, _ = _compile_messages(lambda: tune(_many_gains, x0, mode="measure", **opts))
-    assert measured.mode == "reverse" and len(compiled_first) >= 2  # both modes' chunks were compiled
+def _chunks(compiled):
+    return [m for m in compiled if m.startswith("Compiling jit(chunk)")]
+
+
+def test_measure_compiles_both_modes_and_runs_the_faster():
+    opts = dict(optimizer=optax.adam(0.05), steps=20)
+    x0 = jnp.zeros(30)
+    measured, compiled_first, _ = _compile_messages(lambda: tune(_wide, x0, mode="measure", **opts))
+    assert measured.mode == "reverse" and len(_chunks(compiled_first)) == 2  # "auto" would run forward
     # the run is the reverse-mode run, bit for bit, and neither measures nor compiles again
-    reverse, compiled_reverse, _ = _compile_messages(lambda: tune(_many_gains, x0, mode="reverse", **opts))
-    again, compiled_again, traced_again = _compile_messages(lambda: tune(_many_gains, x0, mode="measure", **opts))
+    reverse, compiled_reverse, _ = _compile_messages(lambda: tune(_wide, x0, mode="reverse", **opts))
+    again, compiled_again, traced_again = _compile_messages(lambda: tune(_wide, x0, mode="measure", **opts))
     assert compiled_reverse == [] and compiled_again == [] and traced_again == []
     for other in (reverse, again):
         np.testing.assert_array_equal(other.params, measured.params)
@@ -82,6 +91,22 @@ def test_measure_picks_reverse_mode_for_many_parameters_and_matches_it():
         assert other.mode == "reverse"
 
 
+def test_measure_keeps_the_auto_mode_when_its_steps_are_cheap(monkeypatch):
+    """A step of a 3-parameter quadratic costs about 0.3 ms here (the chunk call), its compilation
+    about 1 s: with a horizon of 100 steps (30× margin; the default 1,000 leaves 3×) the other mode
+    cannot repay its compilation and is not compiled at all."""
+    monkeypatch.setattr(sys.modules["optim.tune"], "MEASURE_HORIZON_STEPS", 100)
+
+    def bowl(x):
+        return jnp.sum((x - jnp.arange(3.0)) ** 2)
+
+    result, compiled, _ = _compile_messages(
+        lambda: tune(bowl, jnp.zeros(3), method="lbfgs", steps=30, gtol=1e-12, mode="measure")
+    )
+    assert result.mode == "forward" and len(_chunks(compiled)) == 1
+    np.testing.assert_allclose(result.params, [0.0, 1.0, 2.0], atol=1e-9)
+
+
 def test_bad_mode_is_named():
     with pytest.raises(ValueError, match="mode: must be 'auto', 'forward', 'reverse' or 'measure'"):
-        tune(_many_gains, jnp.zeros(3), mode="fastest")
+        tune(_wide, jnp.zeros(3), mode="fastest")
