@@ -584,6 +584,7 @@ def gradient_tuner(
     template = _as_float_tree(r.params0)
     u_template = _u_template(r.reparam, template)
     n_params = int(sum(np.prod(leaf.shape) for leaf in jax.tree_util.tree_leaves(u_template)))
+    auto_forward = use_forward_mode(n_params, n_starts)
     cfg = _Settings(
         w=check_number("penalty_weight", r.penalty_weight),
         tol=check_number("constraint_tol", constraint_tol, allow_zero=True),
@@ -592,7 +593,7 @@ def gradient_tuner(
         patience=patience,
         multiplier_every=check_int("multiplier_every", multiplier_every),
         al=r.constraints is not None and constraint_method == "augmented_lagrangian",
-        use_forward=mode == "forward" or (mode == "auto" and use_forward_mode(n_params, n_starts)),
+        use_forward=mode == "forward" or (mode == "auto" and auto_forward),
         sims_per_eval=check_int("sims_per_eval", r.sims_per_eval),
     )
     m_constraints = 0
@@ -619,11 +620,13 @@ def gradient_tuner(
 
     parts = (callable_key(r.loss), opt, r.reparam, callable_key(r.constraints), callable_key(r.terms))
     static = (cfg._replace(sims_per_eval=0), n_starts, m_constraints, steps_per_call, _u_avals(u_template))
-    if mode == "measure":
-        mode_key = key_or_none("mode", *parts, (cfg._replace(sims_per_eval=0, use_forward=False), *static[1:]))
+    if mode == "measure":  # cfg.use_forward is False here: the key holds no mode
         candidate = lambda m: gradient_tuner(**{**arguments, "mode": m})  # noqa: E731
-        first = "forward" if use_forward_mode(n_params, n_starts) else "reverse"
-        return candidate(_MODES.get_or_build(mode_key, lambda: _faster_mode(candidate, first)))
+        first = "forward" if auto_forward else "reverse"
+        chosen = _MODES.get_or_build(key_or_none("mode", *parts, static), lambda: _faster_mode(candidate, first))
+        # the chosen mode's settings: the same key, and so the same compiled tuner, as the candidate's
+        cfg = cfg._replace(use_forward=chosen == "forward")
+        static = (cfg._replace(sims_per_eval=0), *static[1:])
     built = _TUNERS.get_or_build(key_or_none("tuner", *parts, static), build)
 
     def init(params0: Any = None, key: jax.Array | None = None) -> TunerState:
