@@ -362,16 +362,28 @@ class Problem:
     def jitted(self) -> "Jitted":
         """This problem's jitted ``loss``, ``evaluate``, ``simulate``, ``simulate_batch`` (one params,
         a batched dict of draws), ``search_loss``, batched ``search_losses`` and ``value_and_grad`` of
-        the loss (compiled on first use, then reused for any params: no recompilation per call)."""
+        the loss (compiled on first use, then reused for any params: no recompilation per call;
+        ``evaluate``/``simulate`` compile once whether ``draw``/``key`` are left out or passed as None)."""
         return Jitted(
             loss=jax.jit(self.loss),
-            evaluate=jax.jit(self.evaluate),
-            simulate=jax.jit(self.simulate),
+            evaluate=_with_optional_args(jax.jit(self.evaluate)),
+            simulate=_with_optional_args(jax.jit(self.simulate)),
             simulate_batch=jax.jit(jax.vmap(self.simulate, in_axes=(None, 0))),
             search_loss=jax.jit(self.search_loss),
             search_losses=jax.jit(jax.vmap(self.search_loss)),
             value_and_grad=jax.jit(jax.value_and_grad(self.loss)),
         )
+
+
+def _with_optional_args(fn: Callable) -> Callable:
+    """``fn(params, draw=None, key=None)`` always called with all three arguments: to ``jax.jit``
+    ``f(p)`` and ``f(p, None)`` are different signatures, so each would be compiled (a study's
+    response table and its figure compiled the same rollout twice)."""
+
+    def call(params: Any, draw: dict[str, Any] | None = None, key: jax.Array | None = None) -> Any:
+        return fn(params, draw, key)
+
+    return call
 
 
 class Jitted(NamedTuple):

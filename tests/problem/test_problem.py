@@ -159,14 +159,23 @@ def test_jitted_functions_compile_once_per_problem(problem):
     handler = Collect()
     logging.getLogger("jax").addHandler(handler)
     pb = pid_problem()
+    params = {"gains": GAINS}
     try:
         with jax.log_compiles():
             for kp in (1.0, 2.0, 3.0):
                 pb.jitted.loss({"gains": jnp.asarray([kp, 1.0, 0.1])})
+            # draw/key left out, passed as None or by keyword: one signature (a study's response
+            # table and its figure used to compile the same rollout twice)
+            runs = [pb.jitted.simulate(params), pb.jitted.simulate(params, None), pb.jitted.simulate(params, key=None)]
+            totals = [pb.jitted.evaluate(params).total, pb.jitted.evaluate(params, None, None).total]
     finally:
         logging.getLogger("jax").removeHandler(handler)
     assert pb.jitted is pb.jitted
-    assert len([m for m in messages if m.startswith("Compiling jit(loss)")]) == 1, messages
+    for name in ("loss", "simulate", "evaluate"):
+        assert len([m for m in messages if m.startswith(f"Compiling jit({name})")]) == 1, (name, messages)
+    np.testing.assert_array_equal(runs[0].y, runs[1].y)
+    np.testing.assert_array_equal(runs[0].y, runs[2].y)
+    assert float(totals[0]) == float(totals[1])
 
 
 def test_bad_problems_are_refused():
