@@ -87,7 +87,9 @@ rms_value_and_grad = jax.jit(jax.value_and_grad(rms_of, argnums=(4, 5)), static_
 
 
 def rms(method: str, n: int, past: jax.Array, future: jax.Array, c: float, psi: float) -> float:
-    return float(rms_value_and_grad(method, n, past, future, jnp.log(c), jnp.log(psi))[0])
+    # strong float64 scalars, as the tuner passes: a Python float would be weakly typed, another signature
+    log_c, log_psi = (jnp.log(jnp.asarray(v, float)) for v in (c, psi))
+    return float(rms_value_and_grad(method, n, past, future, log_c, log_psi)[0])
 
 
 def tune(method: str, n: int, past: jax.Array, future: jax.Array, cfg: Config) -> dict[str, float]:
