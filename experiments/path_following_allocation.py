@@ -156,8 +156,9 @@ def allocation_decay(cfg: Config) -> dict[str, float]:
     tau = jnp.array([0.3])
     z = jnp.zeros(3)
     errs = []
+    allocate = jax.jit(lambda z: pf.allocate(z, tau, B, W, cfg.gamma, cfg.rho, 0.01, 4))  # eager: a compile per call
     for _ in range(50):  # 50 × 10 ms
-        z = pf.allocate(z, tau, B, W, cfg.gamma, cfg.rho, 0.01, 4)
+        z = allocate(z)
         errs.append(float(abs(tau[0] - (B @ z[:2])[0])))
     u_star = pf.min_norm_allocation(tau, B, W)
     return {
