@@ -5,7 +5,7 @@ Models (:mod:`jaxsim.plants.ball_on_swing`, :mod:`jaxsim.control.periodic_riccat
 :mod:`jaxsim.control.transverse_vhc`).  The study:
 
 1. checks the plant: the unforced frictionless plant conserves its energy (RK4 run), and the
-   autodiff Euler–Lagrange dynamics agree with an independent hand-derived model in (θ, s)
+   closed-form (θ, φ) dynamics agree with an independent hand-derived model in (θ, s)
    coordinates integrated by SciPy ``solve_ivp`` (DOP853, rtol 1e-12);
 2. reduces the dynamics on ``θ = kφ`` to the αβγ-equation, finds the periodic orbit through
    ``(φ_a, 0)`` and checks that the integral ``I`` is constant along it;

@@ -15,7 +15,8 @@ Generalised coordinates ``q = (θ, φ)`` (rad), state ``x = (θ, φ, θ̇, φ̇)
     T = ½ J_f θ̇² + ½ m |ṗ|² + ½ J_b (θ̇ − ṡ/r)²   (rolling: the ball turns by −ds/r relative to the beam)
     V = m g p_y = m g (s sin θ + d cos θ)
 
-and the equations of motion come from :func:`jaxsim.core.lagrangian.euler_lagrange` (autodiff).
+and the equations of motion are written out in closed form (:func:`mass_and_bias`), checked in the
+tests against :func:`jaxsim.core.lagrangian.euler_lagrange` (autodiff of ``T`` and ``V``).
 
 The virtual holonomic constraint ``θ = kφ`` reduces the unactuated row to the αβγ-equation
 ``α(φ) φ̈ + β(φ) φ̇² + γ(φ) = 0`` whose integral is
@@ -36,7 +37,6 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxsim.core.integrators import RK4_ROLLED
-from jaxsim.core.lagrangian import euler_lagrange
 from jaxsim.core.pytree import pytree_dataclass
 
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(12)
@@ -106,20 +106,42 @@ def energy(p: Params, x: jax.Array) -> jax.Array:
 
 
 def mass_and_bias(p: Params, q: jax.Array, qd: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """``M(q) (2, 2)`` and ``h(q, q̇) (2,)`` with ``M q̈ + h = (u, 0)``."""
-    momentum = jax.jacfwd(lambda a, b: kinetic(p, a, b), argnums=1)
-    mass = jax.jacfwd(momentum, argnums=1)(q, qd)
-    mixed = jax.jacfwd(momentum, argnums=0)(q, qd)
-    bias = mixed @ qd - jax.jacfwd(lambda a: kinetic(p, a, qd))(q) + jax.grad(lambda a: potential(p, a))(q)
-    return mass, bias
+    """``M(q) (2, 2)`` and ``h(q, q̇) (2,)`` with ``M q̈ + h = (u, 0)``, in closed form (module docstring).
+
+    With ``s' = ds/dφ``, the kinetic energy is ``½ q̇ᵀ M(φ) q̇``:
+
+        M₁₁ = J_f + J_b + m (d² + s²),   M₁₂ = −(m d + J_b/r) s',   M₂₂ = (m + J_b/r²) s'²
+
+    and, ``M`` depending on ``φ`` alone, ``h = (M₁₁' θ̇ φ̇ + M₁₂' φ̇², −½ M₁₁' θ̇² + ½ M₂₂' φ̇²) + ∂V/∂q``
+    (primes: ``d/dφ``).  The same equations as Euler–Lagrange by autodiff of :func:`kinetic` and
+    :func:`potential` (the tests hold them to 1e-12); written out because the nested ``jacfwd``
+    made every program that evaluates them (the αβγ quadratures, the transverse linearisation)
+    several times larger to trace and compile."""
+    th, phi = q[0], q[1]
+    thd, phd = qd[0], qd[1]
+    d, m, jb = p.height(), p.m, p.ball_inertia()
+    tan = jnp.tan(phi)
+    s = d * tan
+    s1 = d * (1.0 + tan**2)  # ds/dφ
+    s2 = 2.0 * s1 * tan  # d²s/dφ²
+    roll = m * d + jb / p.r  # coupling through the ball's rolling
+    slide = m + jb / p.r**2
+    m11, m12, m22 = p.j_f + jb + m * (d**2 + s**2), -roll * s1, slide * s1**2
+    dm11, dm12, dm22 = 2.0 * m * s * s1, -roll * s2, 2.0 * slide * s1 * s2
+    c, sn = jnp.cos(th), jnp.sin(th)
+    mg = m * p.g
+    h1 = dm11 * thd * phd + dm12 * phd**2 + mg * (s * c - d * sn)
+    h2 = -0.5 * dm11 * thd**2 + 0.5 * dm22 * phd**2 + mg * s1 * sn
+    return jnp.stack([jnp.stack([m11, m12]), jnp.stack([m12, m22])]), jnp.stack([h1, h2])
 
 
 def dynamics(p: Params, x: jax.Array, u: jax.Array) -> jax.Array:
-    """``ẋ (4,)`` for the state ``x = (θ, φ, θ̇, φ̇)`` and torque ``u`` (N·m), by Euler–Lagrange autodiff."""
+    """``ẋ (4,)`` for the state ``x = (θ, φ, θ̇, φ̇)`` and torque ``u`` (N·m): ``M q̈ = (u, 0) − h``."""
     q, qd = x[:2], x[2:]
-    qdd = euler_lagrange(
-        lambda a, b: kinetic(p, a, b), lambda a: potential(p, a), q, qd, jnp.stack([u, jnp.zeros_like(u)])
-    )
+    mass, h = mass_and_bias(p, q, qd)
+    rhs = jnp.stack([u - h[0], -h[1]])
+    det = mass[0, 0] * mass[1, 1] - mass[0, 1] ** 2  # M ≻ 0: a 2×2 inverse, no LAPACK call in the loop
+    qdd = jnp.stack([mass[1, 1] * rhs[0] - mass[0, 1] * rhs[1], mass[0, 0] * rhs[1] - mass[0, 1] * rhs[0]]) / det
     return jnp.concatenate([qd, qdd])
 
 

@@ -1,4 +1,4 @@
-"""Ball on a swing: the autodiff Euler–Lagrange plant against hand-derived (θ, s) equations, energy
+"""Ball on a swing: the closed-form plant against Euler–Lagrange by autodiff and hand-derived (θ, s) equations, energy
 conservation, the αβγ reduction against the same oracle, the integral of motion and the transverse
 linearisation against finite differences."""
 
@@ -9,6 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from jaxsim.core.lagrangian import euler_lagrange
 from jaxsim.plants import ball_on_swing as bos
 
 P = bos.Params()
@@ -41,6 +42,28 @@ def test_dynamics_match_hand_derived_equations():
         got = np.asarray(f(jnp.asarray(x), jnp.asarray(u)))
         np.testing.assert_allclose(got[:2], x[2:], rtol=0, atol=0)
         np.testing.assert_allclose(got[2:], oracle_accel(x, u), rtol=1e-10, atol=1e-10)
+
+
+@pytest.mark.parametrize("p", [P, bos.Params(m=0.3, r=0.04, j_b=1e-4, j_f=0.02, d=0.06)], ids=["paper", "offset"])
+def test_closed_form_equations_equal_euler_lagrange_autodiff(p):
+    """The written-out ``M`` and ``h`` against autodiff of the energies: ``M = ∂²T/∂q̇²`` and the
+    accelerations of :func:`jaxsim.core.lagrangian.euler_lagrange` (also with ``d ≠ r``)."""
+
+    def both(x, u):
+        q, qd = x[:2], x[2:]
+        mass, _ = bos.mass_and_bias(p, q, qd)
+        mass_ad = jax.hessian(lambda b: bos.kinetic(p, q, b))(qd)
+        force = jnp.stack([u, jnp.zeros_like(u)])
+        qdd_ad = euler_lagrange(lambda a, b: bos.kinetic(p, a, b), lambda a: bos.potential(p, a), q, qd, force)
+        return mass, mass_ad, bos.dynamics(p, x, u)[2:], qdd_ad
+
+    both = jax.jit(both)
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        x = jnp.asarray(rng.uniform([-0.6, -0.9, -3, -4], [0.6, 0.9, 3, 4]))
+        mass, mass_ad, qdd, qdd_ad = both(x, jnp.asarray(rng.uniform(-1, 1)))
+        np.testing.assert_allclose(mass, mass_ad, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(qdd, qdd_ad, rtol=1e-11, atol=1e-11)
 
 
 def test_energy_conserved_without_torque():
