@@ -13,6 +13,7 @@ peak and peak time, which are inf, as python-control reports them.
 
 from __future__ import annotations
 
+import functools
 from typing import Any, NamedTuple
 
 import jax
@@ -83,6 +84,16 @@ def _one_trace(t: jax.Array, y: jax.Array, yf: jax.Array, band: float, limits: t
     )
 
 
+@functools.partial(jax.jit, static_argnums=(3, 4))
+def _traces(t: jax.Array, y: jax.Array, yf: jax.Array, band: float, limits: tuple[float, float]) -> StepInfo:
+    """:func:`_one_trace` over every trace of ``y (..., N)``, one compiled program (eagerly, each of
+    its few dozen operations compiled on its own)."""
+    fn = lambda yy, ff: _one_trace(t, yy, ff, band, limits)  # noqa: E731
+    for _ in range(y.ndim - 1):
+        fn = jax.vmap(fn)
+    return fn(y, yf)
+
+
 def step_info(
     sysdata: Any,
     T: Any = None,
@@ -127,10 +138,7 @@ def step_info(
         yf = jnp.broadcast_to(jnp.asarray(yfinal, dtype=jnp.result_type(y, float)), y.shape[:-1])
     yf = jnp.broadcast_to(yf, y.shape[:-1])
     limits = (float(RiseTimeLimits[0]), float(RiseTimeLimits[1]))
-    fn = lambda yy, ff: _one_trace(t, yy, ff, float(SettlingTimeThreshold), limits)  # noqa: E731
-    for _ in range(y.ndim - 1):
-        fn = jax.vmap(fn)
-    info = fn(y, yf)
+    info = _traces(t, y, yf, float(SettlingTimeThreshold), limits)
     if y.ndim == 3 and y.shape[:2] == (1, 1):
         info = StepInfo(*(v[0, 0] for v in info))
     return info
