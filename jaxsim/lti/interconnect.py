@@ -4,13 +4,17 @@ The state of a combination stacks the states of its parts in argument order (``[
 number or matrix may stand for a static gain (a system with no states); a scalar becomes ``k·I``
 of the size the other system needs.  Continuous parts give a :class:`~jaxsim.core.system.Plant`,
 discrete parts (all with the same ``dt``) a ``StateSpace``; everything is ``jnp``, so the result
-is differentiable in the parts' matrices.
+is differentiable in the parts' matrices.  The matrix algebra of each combination runs as one jitted
+program per shape (eagerly, each of its few dozen small operations was compiled on its own: ~1 s on
+the first call of a new size).
 """
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -54,11 +58,16 @@ def _series2(s1: StateSpace, s2: StateSpace, names: tuple[str, str]) -> StateSpa
     """``s2 ∘ s1``: the output of ``s1`` drives ``s2``."""
     if s1.n_outputs != s2.n_inputs:
         raise ValueError(f"{names[1]}: has {s2.n_inputs} inputs but {names[0]} has {s1.n_outputs} outputs")
+    return _series_matrices(s1, s2, _common_dt([(names[0], s1), (names[1], s2)]))
+
+
+@functools.partial(jax.jit, static_argnums=2)
+def _series_matrices(s1: StateSpace, s2: StateSpace, dt: float | None) -> StateSpace:
     a = _block_diag(s1.a, s2.a)
     a = a.at[s1.n_states :, : s1.n_states].set(s2.b @ s1.c)
     b = jnp.concatenate([s1.b, s2.b @ s1.d], axis=0)
     c = jnp.concatenate([s2.d @ s1.c, s2.c], axis=1)
-    return StateSpace(a, b, c, s2.d @ s1.d, _common_dt([(names[0], s1), (names[1], s2)]))
+    return StateSpace(a, b, c, s2.d @ s1.d, dt)
 
 
 def _parallel2(s1: StateSpace, s2: StateSpace, names: tuple[str, str]) -> StateSpace:
@@ -67,12 +76,17 @@ def _parallel2(s1: StateSpace, s2: StateSpace, names: tuple[str, str]) -> StateS
             f"{names[1]}: has {s2.n_outputs} outputs and {s2.n_inputs} inputs, {names[0]} has "
             f"{s1.n_outputs} and {s1.n_inputs}; parallel needs equal sizes"
         )
+    return _parallel_matrices(s1, s2, _common_dt([(names[0], s1), (names[1], s2)]))
+
+
+@functools.partial(jax.jit, static_argnums=2)
+def _parallel_matrices(s1: StateSpace, s2: StateSpace, dt: float | None) -> StateSpace:
     return StateSpace(
         _block_diag(s1.a, s2.a),
         jnp.concatenate([s1.b, s2.b], axis=0),
         jnp.concatenate([s1.c, s2.c], axis=1),
         s1.d + s2.d,
-        _common_dt([(names[0], s1), (names[1], s2)]),
+        dt,
     )
 
 
@@ -146,13 +160,20 @@ def feedback(sys1: Any, sys2: Any = 1, sign: int = -1) -> Plant | StateSpace:
         )
     dt = _common_dt([("sys1", s1), ("sys2", s2)])
     sg = float(sign)
-    p1, m1, n1 = s1.n_outputs, s1.n_inputs, s1.n_states
-    loop = jnp.eye(p1, dtype=s1.d.dtype) - sg * s1.d @ s2.d
-    if is_concrete(loop) and np.linalg.cond(np.asarray(loop)) > 1e12:
-        raise ValueError(
-            "sys2: the feedback loop is algebraically ill-posed: I − sign·D1·D2 is singular "
-            "(the feedthrough terms cancel around the loop)"
-        )
+    if is_concrete(s1.d) and is_concrete(s2.d):
+        loop = np.eye(s1.n_outputs) - sg * np.asarray(s1.d) @ np.asarray(s2.d)
+        if np.linalg.cond(loop) > 1e12:
+            raise ValueError(
+                "sys2: the feedback loop is algebraically ill-posed: I − sign·D1·D2 is singular "
+                "(the feedthrough terms cancel around the loop)"
+            )
+    return wrap(_feedback_matrices(s1, s2, sg, dt))
+
+
+@functools.partial(jax.jit, static_argnums=(2, 3))
+def _feedback_matrices(s1: StateSpace, s2: StateSpace, sg: float, dt: float | None) -> StateSpace:
+    m1, n1 = s1.n_inputs, s1.n_states
+    loop = jnp.eye(s1.n_outputs, dtype=s1.d.dtype) - sg * s1.d @ s2.d
     # y = Cy [x1; x2] + Dy u, from (I − sign·D1 D2) y = C1 x1 + sign·D1 C2 x2 + D1 u
     cy = jnp.linalg.solve(loop, jnp.concatenate([s1.c, sg * s1.d @ s2.c], axis=1))
     dy = jnp.linalg.solve(loop, s1.d)
@@ -162,4 +183,4 @@ def feedback(sys1: Any, sys2: Any = 1, sign: int = -1) -> Plant | StateSpace:
     du = jnp.eye(m1, dtype=dy.dtype) + sg * s2.d @ dy
     a = _block_diag(s1.a, s2.a) + jnp.concatenate([s1.b @ cu, s2.b @ cy], axis=0)
     b = jnp.concatenate([s1.b @ du, s2.b @ dy], axis=0)
-    return wrap(StateSpace(a, b, cy, dy, dt))
+    return StateSpace(a, b, cy, dy, dt)
