@@ -28,6 +28,12 @@ def tf2ss(num: jax.Array, den: jax.Array) -> tuple[jax.Array, jax.Array, jax.Arr
         raise ValueError(f"num: improper transfer function (len(num)={num.shape[0]} > len(den)={den.shape[0]})")
     if is_concrete(den) and float(den[0]) == 0.0:
         raise ValueError("den: leading coefficient must be non-zero")
+    return _controller_canonical(num, den)
+
+
+@jax.jit
+def _controller_canonical(num: jax.Array, den: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array, jax.Array]:
+    # one compiled program per degree (eagerly, each of these small operations compiled on its own)
     n = den.shape[0] - 1
     num = jnp.concatenate([jnp.zeros(den.shape[0] - num.shape[0]), num]) / den[0]
     den = den / den[0]
