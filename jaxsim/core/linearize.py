@@ -6,6 +6,7 @@ from typing import Callable, NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from jaxsim.core.system import Plant
 from jaxsim.core.validation import check_finite
@@ -32,7 +33,13 @@ def linearize(plant: Plant, x0: jax.Array, u0: jax.Array, t: float = 0.0) -> Lin
         raise ValueError(f"u0: expected shape ({plant.n_inputs},), got {tuple(u0.shape)}")
     check_finite("x0", x0)
     check_finite("u0", u0)
-    return _jacobians(plant, x0, u0, jnp.asarray(t, dtype=x0.dtype))
+    tt = jnp.asarray(t, dtype=x0.dtype)
+    if all(isinstance(leaf, _ARRAY_TYPES) for leaf in jax.tree_util.tree_leaves(plant.params)):
+        return _jacobians(plant, x0, u0, tt)
+    return _jacobians.__wrapped__(plant, x0, u0, tt)  # parameters jit cannot take: run eagerly
+
+
+_ARRAY_TYPES = (jax.Array, np.ndarray, np.generic, bool, int, float, complex)
 
 
 @jax.jit

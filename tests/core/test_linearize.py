@@ -1,5 +1,8 @@
 """Linearisation by jacfwd against the closed-form state space of the paper's plants."""
 
+import logging
+
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -44,3 +47,49 @@ def test_bad_shapes():
         linearize(PEND, jnp.zeros(3), jnp.zeros(1))
     with pytest.raises(ValueError, match="u0: expected shape"):
         linearize(PEND, jnp.zeros(2), jnp.zeros(2))
+
+
+def _decay_plant(params):
+    return Plant(
+        params=params,
+        dynamics=_decay,
+        output=_identity,
+        n_states=1,
+        n_inputs=1,
+        n_outputs=1,
+    )
+
+
+def _identity(p, x):
+    return x
+
+
+def _decay(p, x, u, t):
+    return -p["a"] * p.get("o", _Gain()).k * x + u
+
+
+class _Gain:  # a parameter that is not a JAX type (not a pytree: a leaf jit cannot take)
+    k = 2.0
+
+
+def test_one_compilation_for_new_parameters_and_points_and_eager_for_foreign_parameters():
+    """The Jacobians run as one jitted program reused for new parameter values and points (the
+    plant's functions are the key: module-level ones here, a fresh lambda would be a new key); a
+    parameter that is not a JAX type is linearised eagerly."""
+    messages = []
+
+    class Collect(logging.Handler):
+        def emit(self, record):
+            messages.append(record.getMessage())
+
+    handler = Collect()
+    logging.getLogger("jax").addHandler(handler)
+    try:
+        with jax.log_compiles():
+            lins = [linearize(_decay_plant({"a": a}), jnp.full(1, a), jnp.zeros(1)) for a in (3.0, 5.0)]
+    finally:
+        logging.getLogger("jax").removeHandler(handler)
+    assert len([m for m in messages if m.startswith("Compiling jit(_jacobians)")]) == 1, messages
+    assert [float(lin.a[0, 0]) for lin in lins] == [-6.0, -10.0]  # −a·k with the default k = 2
+    foreign = linearize(_decay_plant({"a": 3.0, "o": _Gain()}), jnp.zeros(1), jnp.zeros(1))
+    assert float(foreign.a[0, 0]) == -6.0 and float(foreign.b[0, 0]) == 1.0
