@@ -94,16 +94,19 @@ def test_measure_compiles_both_modes_and_runs_the_faster():
 def test_measure_keeps_the_auto_mode_when_its_steps_are_cheap(monkeypatch):
     """A step of a 3-parameter quadratic costs about 0.3 ms here (the chunk call), its compilation
     about 1 s: with a horizon of 100 steps (30× margin; the default 1,000 leaves 3×) the other mode
-    cannot repay its compilation and is not compiled at all."""
+    cannot repay its compilation and is neither built nor compiled."""
     monkeypatch.setattr(sys.modules["optim.tune"], "MEASURE_HORIZON_STEPS", 100)
 
     def bowl(x):
         return jnp.sum((x - jnp.arange(3.0)) ** 2)
 
+    tuners = sys.modules["optim.tune"]._TUNERS
+    before = len(tuners)
     result, compiled, _ = _compile_messages(
         lambda: tune(bowl, jnp.zeros(3), method="lbfgs", steps=30, gtol=1e-12, mode="measure")
     )
     assert result.mode == "forward" and len(_chunks(compiled)) == 1
+    assert len(tuners) == before + 1  # nor is its tuner built
     np.testing.assert_allclose(result.params, [0.0, 1.0, 2.0], atol=1e-9)
 
 
