@@ -97,6 +97,14 @@ def zero_candidates(s: StateSpace) -> tuple[jax.Array, jax.Array, jax.Array, jax
     return a_z, w, rank >= jnp.sum(r), nonzero_rows, delta
 
 
+@jax.jit
+def _zeros_and_checks(s: StateSpace) -> tuple[jax.Array, jax.Array, jax.Array, jax.Array]:
+    """``(candidate zeros, keep, nonzero_rows, delta)`` as one compiled program per shape (eagerly,
+    its few dozen small operations were each compiled on a first call)."""
+    a_z, _, keep, nonzero_rows, delta = zero_candidates(s)
+    return simple_eigvals(a_z, keep), keep, nonzero_rows, delta
+
+
 def zero(sys: Any) -> jax.Array:
     """Transmission zeros of a square system (``p = m``), see the module docstring.
 
@@ -119,7 +127,7 @@ def zero(sys: Any) -> jax.Array:
     cdtype = jnp.result_type(s.a, jnp.complex64)
     if s.n_states == 0:
         return jnp.zeros((0,), dtype=cdtype)
-    a_z, _, keep, nonzero_rows, delta = zero_candidates(s)
+    zeros, keep, nonzero_rows, delta = _zeros_and_checks(s)
     if is_concrete((s.a, s.b, s.c, s.d)):
         if not bool(nonzero_rows):
             raise ValueError("sys: an output has an identically zero transfer row; its zeros are undefined")
@@ -128,7 +136,6 @@ def zero(sys: Any) -> jax.Array:
                 "sys: singular decoupling matrix (MIMO structure not covered by zero(); "
                 "each output's first nonzero Markov rows must be independent)"
             )
-    zeros = simple_eigvals(a_z, keep)
     if is_concrete(zeros):
         return zeros[np.asarray(keep)]
     return jnp.where(keep, zeros, jnp.inf).astype(cdtype)
