@@ -23,6 +23,7 @@ of the result, so in practice differentiate through :func:`hold_matrices`).
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Any
 
 import jax
@@ -140,13 +141,20 @@ def c2d(
         t_map = 2.0 * np.tan(w0 * ts / 2.0) / w0
     if s.n_states == 0:
         return StateSpace(s.a, s.b, s.c, s.d, ts)
-    if method == "zoh":
-        ad, bd = c2d_zoh(s.a, s.b, ts)
-        return wrap(StateSpace(ad, bd, s.c, s.d, ts))
-    if method == "foh":
-        ad, g0, g1 = hold_matrices(s.a, s.b, ts)
-        return wrap(StateSpace(ad, g0 - g1 + ad @ g1, s.c, s.d + s.c @ g1, ts))
     if method == "matched":
         return _matched(s, ts)
+    return wrap(_discretised(s, ts, t_map, "gbt" if alpha is not None else method, alpha))
+
+
+@partial(jax.jit, static_argnums=(1, 3, 4))
+def _discretised(s: StateSpace, ts: float, t_map: float, method: str, alpha: float | None) -> StateSpace:
+    """The zoh / foh / gbt map as one compiled program (eagerly, the matrix exponential's many
+    small operations were each compiled on a first call)."""
+    if method == "zoh":
+        ad, bd = c2d_zoh(s.a, s.b, ts)
+        return StateSpace(ad, bd, s.c, s.d, ts)
+    if method == "foh":
+        ad, g0, g1 = hold_matrices(s.a, s.b, ts)
+        return StateSpace(ad, g0 - g1 + ad @ g1, s.c, s.d + s.c @ g1, ts)
     ad, bd, cd, dd = _gbt(s, t_map, alpha)
-    return wrap(StateSpace(ad, bd, cd, dd, ts))
+    return StateSpace(ad, bd, cd, dd, ts)

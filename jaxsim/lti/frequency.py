@@ -136,8 +136,15 @@ def frequency_response(
     :func:`default_omega` chooses ``omega_num`` points."""
     s = as_state_space(sys)
     w = _omega(s, omega, omega_num)
-    g = _squeeze(s, response_at(s, w), squeeze)
-    return FrequencyResponse(jnp.abs(g), jnp.angle(g), w)
+    magnitude, phase = _magnitude_phase(s, jnp.asarray(w))
+    return FrequencyResponse(_squeeze(s, magnitude, squeeze), _squeeze(s, phase, squeeze), w)
+
+
+@jax.jit
+def _magnitude_phase(s: StateSpace, w: jax.Array) -> tuple[jax.Array, jax.Array]:
+    # one compiled program per shape (eagerly, the resolvent's small operations were each compiled)
+    g = response_at(s, w)
+    return jnp.abs(g), jnp.angle(g)
 
 
 def bode(sys: Any, omega: Any = None, omega_num: int | None = None, squeeze: bool | None = None) -> FrequencyResponse:
