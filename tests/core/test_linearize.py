@@ -1,8 +1,5 @@
 """Linearisation by jacfwd against the closed-form state space of the paper's plants."""
 
-import logging
-
-import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -12,6 +9,7 @@ from jaxsim.core.linearize import find_equilibrium, linearize
 from jaxsim.core.system import Plant
 from jaxsim.core.transfer_function import ss2tf
 from jaxsim.plants.second_order import astatic_plant, static_plant
+from tests.jax_log import jax_messages
 
 
 def test_linearised_second_order_plants_have_the_paper_transfer_functions():
@@ -76,19 +74,8 @@ def test_one_compilation_for_new_parameters_and_points_and_eager_for_foreign_par
     """The Jacobians run as one jitted program reused for new parameter values and points (the
     plant's functions are the key: module-level ones here, a fresh lambda would be a new key); a
     parameter that is not a JAX type is linearised eagerly."""
-    messages = []
-
-    class Collect(logging.Handler):
-        def emit(self, record):
-            messages.append(record.getMessage())
-
-    handler = Collect()
-    logging.getLogger("jax").addHandler(handler)
-    try:
-        with jax.log_compiles():
-            lins = [linearize(_decay_plant({"a": a}), jnp.full(1, a), jnp.zeros(1)) for a in (3.0, 5.0)]
-    finally:
-        logging.getLogger("jax").removeHandler(handler)
+    with jax_messages() as messages:
+        lins = [linearize(_decay_plant({"a": a}), jnp.full(1, a), jnp.zeros(1)) for a in (3.0, 5.0)]
     assert len([m for m in messages if m.startswith("Compiling jit(_jacobians)")]) == 1, messages
     assert [float(lin.a[0, 0]) for lin in lins] == [-6.0, -10.0]  # −a·k with the default k = 2
     foreign = linearize(_decay_plant({"a": 3.0, "o": _Gain()}), jnp.zeros(1), jnp.zeros(1))

@@ -193,25 +193,13 @@ def test_robust_objectives_reach_their_known_minimisers():
 def test_each_run_compiles_its_step_once():
     """Stable carry types: the jitted step must not recompile after the first step (it did once,
     when a weak-typed optimiser-state leaf turned strong; that cost seconds per run)."""
-    import logging
-
     from optim.pso import pso
+    from tests.jax_log import jax_messages
 
-    messages = []
-
-    class Collect(logging.Handler):
-        def emit(self, record):
-            messages.append(record.getMessage())
-
-    handler = Collect()
-    logging.getLogger("jax").addHandler(handler)
-    try:
-        f = lambda x: jnp.sum((x - 1.0) ** 2)  # noqa: E731
-        with jax.log_compiles():
-            tune(f, jnp.zeros(2), optimizer=optax.lbfgs(), steps=6, n_starts=2)
-            pso(f, -np.ones(2), np.ones(2), n_particles=8, n_iters=30)
-    finally:
-        logging.getLogger("jax").removeHandler(handler)
+    f = lambda x: jnp.sum((x - 1.0) ** 2)  # noqa: E731
+    with jax_messages() as messages:
+        tune(f, jnp.zeros(2), optimizer=optax.lbfgs(), steps=6, n_starts=2)
+        pso(f, -np.ones(2), np.ones(2), n_particles=8, n_iters=30)
     names = ("Compiling jit(chunk)", "Compiling jit(_jitted_steps)")
     compiles = [m for m in messages if m.startswith(names)]
     assert len(compiles) == 2, compiles

@@ -1,8 +1,6 @@
 """The chunked tuner: same trajectory whatever the chunk length, compiled once across calls,
 ``mode="auto"`` over parameters × starts, L-BFGS by name, honest accounting."""
 
-import logging
-
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -11,6 +9,7 @@ import pytest
 
 from optim.compile_cache import fingerprint, key_or_none
 from optim.tune import FORWARD_MODE_MAX_PARAMS, tune, use_forward_mode
+from tests.jax_log import jax_messages
 
 
 def _well(x):
@@ -42,19 +41,8 @@ def test_chunked_run_equals_one_step_per_call(method):
 
 
 def _compile_messages(run):
-    messages = []
-
-    class Collect(logging.Handler):
-        def emit(self, record):
-            messages.append(record.getMessage())
-
-    handler = Collect()
-    logging.getLogger("jax").addHandler(handler)
-    try:
-        with jax.log_compiles():
-            out = run()
-    finally:
-        logging.getLogger("jax").removeHandler(handler)
+    with jax_messages() as messages:
+        out = run()
     compiled = [m for m in messages if m.startswith("Compiling")]
     return out, compiled, [m for m in messages if m.startswith("Finished tracing")]
 

@@ -2,8 +2,6 @@
 against simulate() + core.metrics, robust() against explicit draws, sample() against the Monte-Carlo
 engine's draws, monte_carlo(problem) against robust(), jitted functions compiled once."""
 
-import logging
-
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -15,6 +13,7 @@ from jaxsim.montecarlo.kernel import run_one
 from jaxsim.problem import Param, ParamSpace, Problem, Scenario
 from optim import tune
 from optim.problems import PIDTuning
+from tests.jax_log import jax_messages
 
 TUNING = PIDTuning(t_final=1.0)
 GAINS = jnp.asarray([6.0, 4.0, 0.3])
@@ -150,26 +149,15 @@ def test_from_terms_simulates_once_for_loss_and_constraints_and_tunes_as_two_cal
 
 
 def test_jitted_functions_compile_once_per_problem(problem):
-    messages = []
-
-    class Collect(logging.Handler):
-        def emit(self, record):
-            messages.append(record.getMessage())
-
-    handler = Collect()
-    logging.getLogger("jax").addHandler(handler)
     pb = pid_problem()
     params = {"gains": GAINS}
-    try:
-        with jax.log_compiles():
-            for kp in (1.0, 2.0, 3.0):
-                pb.jitted.loss({"gains": jnp.asarray([kp, 1.0, 0.1])})
-            # draw/key left out, passed as None or by keyword: one signature (a study's response
-            # table and its figure used to compile the same rollout twice)
-            runs = [pb.jitted.simulate(params), pb.jitted.simulate(params, None), pb.jitted.simulate(params, key=None)]
-            totals = [pb.jitted.evaluate(params).total, pb.jitted.evaluate(params, None, None).total]
-    finally:
-        logging.getLogger("jax").removeHandler(handler)
+    with jax_messages() as messages:
+        for kp in (1.0, 2.0, 3.0):
+            pb.jitted.loss({"gains": jnp.asarray([kp, 1.0, 0.1])})
+        # draw/key left out, passed as None or by keyword: one signature (a study's response
+        # table and its figure used to compile the same rollout twice)
+        runs = [pb.jitted.simulate(params), pb.jitted.simulate(params, None), pb.jitted.simulate(params, key=None)]
+        totals = [pb.jitted.evaluate(params).total, pb.jitted.evaluate(params, None, None).total]
     assert pb.jitted is pb.jitted
     for name in ("loss", "simulate", "evaluate"):
         assert len([m for m in messages if m.startswith(f"Compiling jit({name})")]) == 1, (name, messages)
