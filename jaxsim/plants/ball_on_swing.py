@@ -114,7 +114,7 @@ def mass_and_bias(p: Params, q: jax.Array, qd: jax.Array) -> tuple[jax.Array, ja
 
     and, ``M`` depending on ``φ`` alone, ``h = (M₁₁' θ̇ φ̇ + M₁₂' φ̇², −½ M₁₁' θ̇² + ½ M₂₂' φ̇²) + ∂V/∂q``
     (primes: ``d/dφ``).  The same equations as Euler–Lagrange by autodiff of :func:`kinetic` and
-    :func:`potential` (the tests hold them to 1e-12); written out because the nested ``jacfwd``
+    :func:`potential` (the tests hold ``M`` to 1e-12 and ``q̈`` to 1e-11); written out because the nested ``jacfwd``
     made every program that evaluates them (the αβγ quadratures, the transverse linearisation)
     several times larger to trace and compile."""
     th, phi = q[0], q[1]
