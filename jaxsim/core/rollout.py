@@ -36,6 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxsim.core.integrators import RK4, Solver
+from jaxsim.core.loops import fori
 from jaxsim.core.pytree import pytree_dataclass, static_field
 from jaxsim.core.signals import Constant, check_signal
 from jaxsim.core.system import Controller, Estimator, Plant, Sensor, subtract_input_disturbance
@@ -174,9 +175,7 @@ def hold_input(
     def one(i, z):
         return solver.step(field, t0 + i * dt, z, dt)
 
-    if substeps == 1:  # no loop: a one-trip loop nested in the rollout's scan costs compile time under AD
-        return one(0, x)
-    return jax.lax.fori_loop(0, substeps, one, x)
+    return fori(0, substeps, one, x)
 
 
 def _check_plant(plant: Plant, x0: jax.Array, t0: jax.Array) -> None:
@@ -386,7 +385,7 @@ def simulate(
 
     def saved_block(c: _Carry, _: Any) -> tuple[_Carry, Tick]:
         c, first = tick(c)
-        c = jax.lax.fori_loop(1, save_every, lambda _, cc: tick(cc)[0], c)
+        c = fori(1, save_every, lambda _, cc: tick(cc)[0], c)
         return c, first
 
     carry, recs = jax.lax.scan(saved_block, carry, None, length=n_ticks // save_every)

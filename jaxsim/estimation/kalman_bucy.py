@@ -23,6 +23,7 @@ import jax.numpy as jnp
 
 from jaxsim.control.kalman_gain import kalman_bucy
 from jaxsim.core.integrators import RK4, Solver
+from jaxsim.core.loops import fori
 from jaxsim.estimation.kalman import symmetrize
 from jaxsim.estimation.types import GaussianState
 
@@ -33,7 +34,7 @@ def _gqg(Qc: jax.Array, G: jax.Array | None) -> jax.Array:
 
 def _integrate(solver: Solver, field, z: jax.Array, dt: Any, substeps: int) -> jax.Array:
     h = jnp.asarray(dt) / substeps
-    return jax.lax.fori_loop(0, substeps, lambda i, x: solver.step(field, i * h, x, h), z)
+    return fori(0, substeps, lambda i, x: solver.step(field, i * h, x, h), z)
 
 
 def continuous_discrete_predict(

@@ -40,6 +40,7 @@ import numpy as np
 
 from jaxsim.core.discretize import c2d_zoh
 from jaxsim.core.integrators import RK4, Solver
+from jaxsim.core.loops import fori
 from jaxsim.core.system import Plant
 from jaxsim.core.validation import check_finite, check_positive_int, check_real, is_concrete
 from jaxsim.lti.discretize import hold_matrices
@@ -214,7 +215,7 @@ def _nonlinear(
             uu = u0 if hold == "zoh" else u0 + (u1 - u0) * ((tt - t0) / dt)
             return plant.f(z, uu, tt)
 
-        x_next = jax.lax.fori_loop(0, substeps, lambda i, z: solver.step(field, t0 + i * h, z, h), x)
+        x_next = fori(0, substeps, lambda i, z: solver.step(field, t0 + i * h, z, h), x)
         return x_next, x_next
 
     _, xs = jax.lax.scan(interval, x0, jnp.arange(t.shape[0] - 1))

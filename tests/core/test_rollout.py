@@ -66,6 +66,36 @@ def test_save_every_decimates_without_changing_the_simulation():
     np.testing.assert_array_equal(np.asarray(dec.x_final), np.asarray(full.x_final))
 
 
+def _loops(jaxpr) -> list[int]:
+    """Nesting depth of every loop (``scan``/``while``) in a jaxpr, outermost first."""
+    depths: list[int] = []
+
+    def walk(j, depth: int) -> None:
+        for e in j.eqns:
+            loop = e.primitive.name in ("scan", "while")
+            if loop:
+                depths.append(depth)
+            for v in e.params.values():
+                for sub in v if isinstance(v, (tuple, list)) else (v,):
+                    inner = getattr(sub, "jaxpr", sub)
+                    if hasattr(inner, "eqns"):
+                        walk(inner, depth + loop)
+
+    walk(jaxpr.jaxpr, 0)
+    return depths
+
+
+def test_the_tick_is_traced_once_per_loop_level():
+    # save_every = 1 stores every tick: one loop, not a second (zero-trip) loop that would trace,
+    # transform and compile another copy of the tick
+    p = PIDParams(kp=0.8, ki=0.5, kd=0.05, tf=0.02)
+    run = lambda every: jax.make_jaxpr(  # noqa: E731
+        lambda kp: simulate(_loop(dataclasses.replace(p, kp=kp)), jnp.zeros(2), Timing(2.0, 1e-3, save_every=every)).y
+    )(0.8)
+    assert _loops(run(1)) == [0]
+    assert _loops(run(20)) == [0, 1]
+
+
 def test_exact_lti_step_agrees_with_rk4():
     p = PIDParams(kp=0.8, ki=0.5)
     timing = Timing(t_final=2.0, dt=1e-3, controller_period=1e-2)
