@@ -521,6 +521,14 @@ chunk length, parameter shapes): a second ``tune`` with the same ones compiles n
 _U_TEMPLATES = LRUCache()
 
 
+def _default_key() -> jax.Array:
+    """``PRNGKey(0)``, for the default (threefry) implementation as a constant: no eager seeding
+    program to compile on a cold call."""
+    if jax.config.jax_default_prng_impl == "threefry2x32":
+        return jnp.asarray(np.zeros(2, np.uint32))
+    return jax.random.PRNGKey(0)
+
+
 def _u_template(reparam: Any, template: Any) -> Any:
     """Shapes and dtypes of ``invert(reparam, template)``, cached by the reparametrisation and the
     template's shapes: tracing the inverse on every call was most of a warm ``tune`` call's host
@@ -608,16 +616,22 @@ def gradient_tuner(
         objective = _make_objective(terms, r.reparam, cfg)
         # jitted, so the chunk's shape probe and its ``lax.cond`` share one trace of the step
         one = jax.jit(_over_starts(_make_step(objective, opt, r.reparam, cfg), n_starts))
+        start = functools.partial(_initial_carry, opt=opt, n_starts=n_starts, m_constraints=m_constraints)
+
+        def init_from_x(key: jax.Array, x0: Any, spread: jax.Array) -> TunerState:
+            u0 = jax.tree_util.tree_map(lambda a, t: a.astype(t.dtype), invert(r.reparam, x0), u_template)
+            return start(key, u0, spread)
+
         return {
-            "init": jax.jit(functools.partial(_initial_carry, opt=opt, n_starts=n_starts, m_constraints=m_constraints)),
+            # x0 -> u0 -> starts in one program: one compilation on a cold call, not two
+            "init": jax.jit(init_from_x),
             "step": one,
             "chunk": jax.jit(_make_chunk(one, cfg, steps_per_call)),
             "trial_is_gradient": _trial_is_gradient(opt, u_template),
             "executables": {},
-            # one compilation each instead of one eager op per transform on every new process
-            "to_u": jax.jit(lambda x: invert(r.reparam, x)),
+            # one compilation instead of one eager op per transform on every new process
             "to_x": jax.jit(lambda u: apply(r.reparam, u)),
-            "key0": jax.random.PRNGKey(0),  # the default key, made once (an eager op per call otherwise)
+            "key0": _default_key(),
         }
 
     parts = (callable_key(r.loss), opt, r.reparam, callable_key(r.constraints), callable_key(r.terms))
@@ -635,18 +649,18 @@ def gradient_tuner(
         x0 = template if params0 is None else _as_float_tree(params0)
         check_finite("params0", x0)
         check_domain(r.reparam, x0, "params0")
-        u0 = built["to_u"](x0)
-        check_finite("params0 (in unconstrained space)", u0)
-        u0 = jax.tree_util.tree_map(lambda a, t: jnp.asarray(a, t.dtype), u0, u_template)
         k = built["key0"] if key is None else key
-        return built["init"](k, u0, jnp.asarray(spread, ravel_pytree(u0)[0].dtype))
+        dtype = jnp.result_type(*jax.tree_util.tree_leaves(u_template))  # ravel_pytree's, without an eager op
+        state = built["init"](k, x0, np.asarray(spread, dtype))
+        check_finite("params0 (in unconstrained space)", jax.tree_util.tree_map(lambda a: np.asarray(a)[0], state.u))
+        return state
 
     def compiled(state: TunerState) -> Callable:
         """The AOT-compiled chunk for ``state``'s shapes (compiled once, then reused)."""
         sig = jax.tree_util.tree_structure(state), tuple((a.shape, a.dtype) for a in jax.tree_util.tree_leaves(state))
         exe = built["executables"].get(sig)
         if exe is None:
-            exe = built["chunk"].lower(state, jnp.asarray(0, jnp.int32)).compile()
+            exe = built["chunk"].lower(state, np.int32(0)).compile()
             built["executables"][sig] = exe
         return exe
 
@@ -688,7 +702,7 @@ def _run_chunks(
     sims, evals, reason, done, last = 0.0, 0, "", 0, 0.0
     start = time.perf_counter()
     while done < steps:
-        carry, out = exe(carry, jnp.asarray(steps - done, jnp.int32))
+        carry, out = exe(carry, np.int32(steps - done))
         host = jax.device_get(out)
         now = time.perf_counter() - start
         n = int(np.sum(host.ran))

@@ -141,7 +141,7 @@ def fuzzy_problem() -> Problem:
     loop = FuzzyPTuning(cfg)
 
     def loss(p, draw, key):
-        f, h, _ = loop.terms(three_section_of(p, cfg.smooth_temperature, "smooth"), smooth=True)
+        f, h, _ = loop.terms(three_section_of(p, cfg.smooth_temperature, "smooth"), smooth=True, with_details=False)
         return f + 0.5 * cfg.penalty_weight * jnp.sum(jnp.maximum(h, 0.0) ** 2)
 
     return Problem.from_loss("fuzzy_p_smooth_penalised", loop.three_section_space(), loss)

@@ -88,8 +88,11 @@ class FuzzyPTuning:
 
         return jax.vmap(one)(self.points)
 
-    def terms(self, char: Any, smooth: bool) -> tuple[jax.Array, jax.Array, dict[str, jax.Array]]:
-        """``(f, h, details)``: objective, normalised constraints (feasible: ``h ≤ 0``), per-point metrics."""
+    def terms(
+        self, char: Any, smooth: bool, with_details: bool = True
+    ) -> tuple[jax.Array, jax.Array, dict[str, jax.Array]]:
+        """``(f, h, details)``: objective, normalised constraints (feasible: ``h ≤ 0``), per-point
+        metrics (``{}`` with ``with_details=False``: a loss need not trace the settling times)."""
         s = self.setup
         t, y, u = self.rollouts(char)
         y_final = y[:, -1]
@@ -109,6 +112,8 @@ class FuzzyPTuning:
                 jnp.atleast_1d((u_peak - s.u_max) / s.u_max),
             ]
         )
+        if not with_details:
+            return jnp.mean(itae), h, {}
         settling = jax.vmap(lambda tt, yy: step_info(tt, yy).settling_time)(t, y)
         details = dict(itae=itae, overshoot=overshoot, e_final=e_final, u_peak=u_peak, settling=settling)
         return jnp.mean(itae), h, details
@@ -126,7 +131,10 @@ class FuzzyPTuning:
         """Objective ``f`` and constraints ``h`` of the characteristic ``char_of(params)``, from one
         set of rollouts (:meth:`~jaxsim.problem.Problem.from_terms`)."""
         return Problem.from_terms(
-            name, space, lambda p: self.terms(char_of(p), smooth)[:2], penalty_weight=self.setup.penalty_weight
+            name,
+            space,
+            lambda p: self.terms(char_of(p), smooth, with_details=False)[:2],
+            penalty_weight=self.setup.penalty_weight,
         )
 
     def three_section_space(self) -> ParamSpace:
