@@ -102,9 +102,15 @@ def _mats(cfg: Config) -> tuple[np.ndarray, np.ndarray]:
     return cfg.q * np.eye(2), cfg.r_meas * np.eye(2)
 
 
-@functools.partial(jax.jit, static_argnums=0)
 def drifts(cfg: Config, omega0: Any, omega1: Any, dt: Any) -> tuple[jax.Array, jax.Array, jax.Array]:
-    """``(N, μ₀, μ₁)`` of H0 = turn rate ``omega0`` against H1 = ``omega1`` at ``dt`` (Golubkov's eqs. 1–2)."""
+    """``(N, μ₀, μ₁)`` of H0 = turn rate ``omega0`` against H1 = ``omega1`` at ``dt`` (Golubkov's eqs. 1–2).
+
+    Python and NumPy numbers alike enter as float64 arrays: one compilation, not one per weak type."""
+    return _drifts(cfg, *(jnp.asarray(v, float) for v in (omega0, omega1, dt)))
+
+
+@functools.partial(jax.jit, static_argnums=0)
+def _drifts(cfg: Config, omega0: Any, omega1: Any, dt: Any) -> tuple[jax.Array, jax.Array, jax.Array]:
     Q, R = _mats(cfg)
     v = _speed(cfg)
     a, b = sprt_thresholds(cfg.alpha, cfg.beta)
@@ -341,7 +347,7 @@ def run(cfg: Config, progress: Callable[..., Any]) -> StudyResult:
     # 5. sampling interval by gradient
     cost = jax.jit(jax.value_and_grad(lambda lt: delay_cost(cfg, lt)[0]))
     opt = optax.adam(cfg.tune_learning_rate)
-    lt = jnp.log(jnp.asarray(cfg.tune_dt0))
+    lt = jnp.log(jnp.asarray(cfg.tune_dt0, float))  # strong float64, as after an update: one compilation
     state = opt.init(lt)
     tune_rows = []
     for step in range(cfg.tune_steps + 1):
