@@ -71,6 +71,21 @@ def test_a_second_call_traces_and_compiles_nothing():
     assert len(traces) > n_traces and compiled_other
 
 
+def test_a_cold_call_compiles_three_programs_and_the_default_key_is_prngkey_0():
+    from optim.tune import _default_key
+
+    np.testing.assert_array_equal(np.asarray(_default_key()), np.asarray(jax.random.PRNGKey(0)))
+    params0 = jnp.array([0.3, -0.4])  # made before: its own transfer is not the tuner's
+
+    def loss(x):  # a new function: nothing cached for it
+        return jnp.sum((x - 1.0) ** 2 + 0.1 * x**4)
+
+    _, compiled, _ = _compile_messages(lambda: tune(loss, params0, method="lbfgs", steps=20))
+    names = sorted(m.split(" with ")[0].removeprefix("Compiling ") for m in compiled)
+    # the starting point, the chunk of steps, the kept point back to parameters: no eager op
+    assert names == ["jit(<lambda>)", "jit(chunk)", "jit(init_from_x)"], names
+
+
 def test_fingerprint_keys_settings_not_objects():
     assert fingerprint(optax.adam(0.05)) == fingerprint(optax.adam(0.05))
     assert fingerprint(optax.adam(0.05)) != fingerprint(optax.adam(0.1))
