@@ -45,8 +45,9 @@ dashed) into ``--out``.
 
 Usage: ``python -m experiments.benchmarks.tuning_race [--quick] [--problems pid fuzzy trms]
 [--tuners ...] [--rounds 3] [--trms-t-final 30] [--mode auto|forward|reverse|measure]
-[--out results/tuning_race]`` (``--mode``: the gradient tuners' AD mode, :func:`optim.tune`'s
-``mode``; with ``measure`` the cold call includes compiling and timing both modes)
+[--budget PROBLEM.FIELD=N ...] [--out results/tuning_race]`` (``--mode``: the gradient tuners' AD mode,
+:func:`optim.tune`'s ``mode``; with ``measure`` the cold call includes compiling and timing both modes;
+``--budget``: one count of a problem's :class:`Budget`, e.g. ``fuzzy.particles=64 fuzzy.iters=150``)
 """
 
 from __future__ import annotations
@@ -423,6 +424,28 @@ def write_outputs(out: Path, settings: dict[str, Any], records: list, rows: list
     plot(records, rows, out / "tuning_race.png")
 
 
+def with_overrides(budgets: dict[str, Budget], overrides: list[str]) -> dict[str, Budget]:
+    """``budgets`` with each ``"problem.field=value"`` applied (a positive count, or the float
+    ``adam_lr``)."""
+    out = dict(budgets)
+    fields = {f.name: f.type for f in dataclasses.fields(Budget)}
+    for item in overrides:
+        name, _, value = item.partition("=")
+        problem, _, field = name.partition(".")
+        if problem not in out or field not in fields or not value:
+            raise ValueError(
+                f"{item!r}: expected PROBLEM.FIELD=N with PROBLEM in {sorted(out)}, FIELD in {sorted(fields)}"
+            )
+        try:
+            number = float(value) if fields[field] == "float" else int(value)
+        except ValueError:
+            raise ValueError(f"{item!r}: {value!r} is not a valid {fields[field]}") from None
+        if number <= 0:
+            raise ValueError(f"{item!r}: must be positive")
+        out[problem] = dataclasses.replace(out[problem], **{field: number})
+    return out
+
+
 def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     ap = argparse.ArgumentParser(
         description=__doc__.split("\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__
@@ -440,6 +463,13 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     )
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--reference", type=float, nargs="*", default=None, help="best known loss per problem, in order")
+    ap.add_argument(
+        "--budget",
+        nargs="+",
+        default=[],
+        metavar="PROBLEM.FIELD=N",
+        help="override one count of a problem's Budget, e.g. fuzzy.particles=64 fuzzy.iters=150",
+    )
     ap.add_argument("--out", default="results/tuning_race", help="folder for the JSON, CSV and PNG")
     args = ap.parse_args(argv)
     problems = args.problems or (["pid"] if args.quick else list(PROBLEMS))
@@ -447,7 +477,11 @@ def main(argv: list[str] | None = None) -> list[dict[str, Any]]:
     rounds = args.rounds or (1 if args.quick else 3)
     if rounds < 1:
         ap.error("--rounds: must be ≥ 1")
-    budgets = {k: b.scaled(0.5) for k, b in BUDGETS.items()} if args.quick else BUDGETS
+    budgets = {k: b.scaled(0.5) for k, b in BUDGETS.items()} if args.quick else dict(BUDGETS)
+    try:
+        budgets = with_overrides(budgets, args.budget)
+    except ValueError as err:
+        ap.error(f"--budget: {err}")
     reference = dict(zip(problems, args.reference)) if args.reference else None
     load = os.getloadavg()
     print(f"tuning race: {problems} × {tuners}, {rounds} round(s); load average {load[0]:.2f} on {os.cpu_count()} cpus")

@@ -10,12 +10,14 @@ import pytest
 
 import experiments.benchmarks.tuning_race as tr
 from experiments.benchmarks.tuning_race import (
+    BUDGETS,
     Budget,
     race,
     step_times,
     summarise,
     target_of,
     time_to,
+    with_overrides,
     write_outputs,
 )
 from jaxsim.problem import Param, ParamSpace, Problem
@@ -86,3 +88,14 @@ def test_every_race_problem_builds_from_the_studies_and_the_library():
     problems = tr.build_problems(["pid", "fuzzy", "trms"], trms_t_final=2.0)
     assert {n: p.space.dim for n, p in problems.items()} == {"pid": 3, "fuzzy": 4, "trms": 16}
     assert problems["fuzzy"].name == "fuzzy_p_smooth_penalised"
+
+
+def test_budget_overrides_name_the_problem_and_field():
+    out = with_overrides(BUDGETS, ["fuzzy.particles=64", "fuzzy.iters=150", "pid.adam_lr=0.1"])
+    assert (out["fuzzy"].particles, out["fuzzy"].iters, out["fuzzy"].random_n) == (64, 150, BUDGETS["fuzzy"].random_n)
+    assert out["pid"].adam_lr == 0.1 and out["trms"] == BUDGETS["trms"] and BUDGETS["fuzzy"].particles == 16
+    for bad, match in [("fuzzy.nope=3", "FIELD in"), ("ship.iters=3", "PROBLEM in"), ("fuzzy.iters=-3", "positive")]:
+        with pytest.raises(ValueError, match=match):
+            with_overrides(BUDGETS, [bad])
+    with pytest.raises(ValueError, match="not a valid int"):
+        with_overrides(BUDGETS, ["fuzzy.iters=1.5"])
