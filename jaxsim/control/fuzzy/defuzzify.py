@@ -140,7 +140,8 @@ def _rank_sort(keys: jax.Array, *payloads: jax.Array) -> tuple[jax.Array, ...]:
     rank = jnp.sum((ki < kj) | ((ki == kj) & earlier), axis=0)  # (n, ...): a permutation of 0..n-1
     # NaN keys compare false everywhere: their ranks collide and the output is unspecified
     lands = rank[None, :] == jnp.arange(n).reshape(n, 1, *trailing)  # [r, j]: key j lands in row r
-    return tuple(jnp.sum(jnp.where(lands, a[None, :], jnp.zeros((), a.dtype)), axis=1) for a in (keys, *payloads))
+    picked = (jnp.sum(jnp.where(lands, a[None, :], jnp.zeros((), a.dtype)), axis=1) for a in (keys, *payloads))
+    return tuple(p.astype(a.dtype) for p, a in zip(picked, (keys, *payloads)))  # sums widen small ints
 
 
 def _above(m: jax.Array, alpha: jax.Array) -> jax.Array:

@@ -231,10 +231,11 @@ def test_sorting_network_equals_a_sort(n):
     rng = np.random.default_rng(n)
     keys = rng.uniform(-1, 1, (n, 3))
     keys[n // 2] = keys[0]  # ties
-    rows = np.repeat(np.arange(n)[:, None], 3, axis=1)  # payload: each key's original row
+    rows = np.repeat(np.arange(n, dtype=np.int32)[:, None], 3, axis=1)  # payload: each key's original row
     ks, moved = jax.jit(dfz.sort_along_first_axis)(jnp.asarray(keys), jnp.asarray(rows))
     np.testing.assert_array_equal(ks, np.sort(keys, axis=0))
     np.testing.assert_array_equal(keys[np.asarray(moved), np.arange(3)], ks)  # payload moved with its key
+    assert moved.dtype == jnp.asarray(rows).dtype
 
 
 def test_fast_centroid_when_cut_points_fall_on_grid_nodes():
