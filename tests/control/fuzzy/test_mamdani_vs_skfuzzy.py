@@ -227,7 +227,7 @@ def test_empty_output_set_returns_the_grid_middle():
 
 
 @pytest.mark.parametrize("n", [1, 2, 5, 14, 16, 37, 70])
-def test_sorting_network_equals_a_sort(n):
+def test_sort_along_first_axis_equals_a_sort(n):
     rng = np.random.default_rng(n)
     keys = rng.uniform(-1, 1, (n, 3))
     keys[n // 2] = keys[0]  # ties
