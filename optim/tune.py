@@ -82,7 +82,7 @@ from jax.flatten_util import ravel_pytree
 
 from jaxsim.core.progress import postfix, progress_bar
 from jaxsim.core.validation import check_finite
-from jaxsim.problem import Problem
+from jaxsim.problem import Problem, penalised
 from jaxsim.problem.reparam import apply, check_domain, invert
 from optim.compile_cache import LRUCache, callable_key, key_or_none
 from optim.lbfgs import evaluates_trial, find_state, forget_reference, is_trial_linesearch
@@ -182,13 +182,12 @@ def _make_objective(terms: Callable, reparam: Any, cfg: _Settings):
         if f.shape != ():
             raise ValueError(f"loss: must return a scalar, got shape {f.shape}")
         g = jnp.ravel(jnp.asarray(g, f.dtype))
-        pos = jnp.maximum(g, 0.0)
-        merit = f + 0.5 * cfg.w * jnp.sum(pos**2)
+        merit = penalised(f, g, cfg.w)
         if cfg.al:
             j = f + jnp.sum(jnp.maximum(lam + cfg.w * g, 0.0) ** 2 - lam**2) / (2 * cfg.w)
         else:
             j = merit
-        return j, (f, g, jnp.sum(pos), merit)
+        return j, (f, g, jnp.sum(jnp.maximum(g, 0.0)), merit)
 
     return objective
 

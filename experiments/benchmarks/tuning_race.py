@@ -64,7 +64,6 @@ from pathlib import Path
 from typing import Any, Callable, Iterator
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 import optax
 
@@ -137,13 +136,14 @@ def fuzzy_problem() -> Problem:
     """The study's smooth characteristic with its constraint penalty folded into the loss."""
     from experiments.fuzzy_pid_tuning import Config
     from jaxsim.problem.fuzzy_tuning import FuzzyPTuning, three_section_of
+    from jaxsim.problem.problem import penalised
 
     cfg = Config()
     loop = FuzzyPTuning(cfg)
 
     def loss(p, draw, key):
         f, h, _ = loop.terms(three_section_of(p, cfg.smooth_temperature, "smooth"), smooth=True, with_details=False)
-        return f + 0.5 * cfg.penalty_weight * jnp.sum(jnp.maximum(h, 0.0) ** 2)
+        return penalised(f, h, cfg.penalty_weight)
 
     return Problem.from_loss("fuzzy_p_smooth_penalised", loop.three_section_space(), loss)
 

@@ -6,7 +6,7 @@ the ``jaxsim_trms`` env share it).
 """
 
 from jaxsim.core.costs import Breakdown, Objective, RunningCost, combine
-from jaxsim.problem.problem import Jitted, Problem, Scenario
+from jaxsim.problem.problem import Jitted, Problem, Scenario, penalised
 from jaxsim.problem.reducers import cvar, mean, worst_case
 from jaxsim.problem.space import Param, ParamSpace, Sorted
 
@@ -23,5 +23,6 @@ __all__ = [
     "combine",
     "cvar",
     "mean",
+    "penalised",
     "worst_case",
 ]

@@ -34,7 +34,7 @@ from jaxsim.core.rollout import ClosedLoop, Timing, simulate
 from jaxsim.core.signals import Step
 from jaxsim.core.system import Controller
 from jaxsim.plants.second_order import StaticParams, static_plant, static_transfer_function
-from jaxsim.problem.problem import Problem
+from jaxsim.problem.problem import Problem, penalised
 from jaxsim.problem.space import ParamSpace, Sorted
 
 
@@ -125,7 +125,7 @@ class FuzzyPTuning:
     def _exact(self, char: Any) -> tuple[jax.Array, tuple[jax.Array, jax.Array, dict[str, jax.Array]]]:
         """``(J, (f, h, details))`` of the exact characteristic from one set of rollouts."""
         f, h, details = self.terms(char, smooth=False)
-        return f + 0.5 * self.setup.penalty_weight * jnp.sum(jnp.maximum(h, 0.0) ** 2), (f, h, details)
+        return penalised(f, h, self.setup.penalty_weight), (f, h, details)
 
     def problem(self, name: str, space: ParamSpace, char_of: Callable[[Any], Any], smooth: bool) -> Problem:
         """Objective ``f`` and constraints ``h`` of the characteristic ``char_of(params)``, from one

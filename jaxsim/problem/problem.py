@@ -62,6 +62,12 @@ class Scenario(NamedTuple):
     solver: Solver = RK4
 
 
+def penalised(f: jax.Array, g: jax.Array, weight: float) -> jax.Array:
+    """``f + (weight/2)·Σ max(0, g)²``: the quadratic exterior penalty of the constraints ``g ≤ 0``
+    (any shape) added to the objective ``f`` (scalar)."""
+    return f + 0.5 * weight * jnp.sum(jnp.maximum(g, 0.0) ** 2)
+
+
 def _leading(name: str, tree: dict[str, Any]) -> int:
     sizes = {np.shape(v)[0] if np.ndim(v) else None for v in jax.tree_util.tree_leaves(tree)}
     if None in sizes or len(sizes) != 1 or 0 in sizes:
@@ -289,8 +295,7 @@ class Problem:
         """``loss + (penalty_weight/2)·Σ max(0, g)²`` (what the swarm and the searches minimise)."""
         if self.constraints is None:
             return self.loss(params)
-        f, g = self.loss_and_violation(params)
-        return f + 0.5 * self.penalty_weight * jnp.sum(jnp.maximum(g, 0.0) ** 2)
+        return penalised(*self.loss_and_violation(params), self.penalty_weight)
 
     def search_loss(self, z: jax.Array) -> jax.Array:
         """:meth:`penalised_loss` at the search-coordinate point ``z (d,)`` (PSO, grid, random search)."""

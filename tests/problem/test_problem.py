@@ -10,7 +10,7 @@ import pytest
 import jaxsim.montecarlo as mc
 from jaxsim.core import costs, metrics
 from jaxsim.montecarlo.kernel import run_one
-from jaxsim.problem import Param, ParamSpace, Problem, Scenario
+from jaxsim.problem import Param, ParamSpace, Problem, Scenario, penalised
 from optim import tune
 from optim.problems import PIDTuning
 from tests.jax_log import jax_messages
@@ -139,6 +139,8 @@ def test_from_terms_simulates_once_for_loss_and_constraints_and_tunes_as_two_cal
     np.testing.assert_allclose(g, split.violation(x), rtol=1e-14)
     np.testing.assert_allclose(joint.penalised_loss(x), split.penalised_loss(x), rtol=1e-14)
     assert float(g[0]) == pytest.approx(0.05) and float(joint.penalised_loss(x)) > float(f)
+    w_half_sum = 25.0 * (0.05**2 + max(float(g[1]), 0.0) ** 2)  # (w/2)·Σ max(0, g)², w = 50
+    np.testing.assert_allclose(joint.penalised_loss(x), float(f) + w_half_sum, rtol=1e-12)
     assert _loops(joint.penalised_loss, x) == 1 and _loops(split.penalised_loss, x) == 2
     kw = dict(steps=15, constraint_method="augmented_lagrangian", mode="forward")
     a, b = tune(joint, **kw), tune(split, **kw)
@@ -188,3 +190,10 @@ def test_bad_problems_are_refused():
 def test_monte_carlo_of_a_problem_shows_a_progress_bar_on_request(problem, capsys):
     res = mc.monte_carlo(problem, {"gains": GAINS}, 8, 11, block_size=4, progress=True)
     assert res.runs == 8 and "problem:pid: 100%" in capsys.readouterr().err
+
+
+def test_penalised_adds_half_the_weight_times_the_squared_violations_only():
+    g = jnp.array([[-1.0, 0.5], [0.0, 2.0]])  # any shape; -1 and 0 are satisfied
+    assert float(penalised(jnp.array(1.0), g, 4.0)) == pytest.approx(1.0 + 2.0 * (0.25 + 4.0), rel=1e-15)
+    assert float(penalised(jnp.array(3.0), -(g**2), 4.0)) == 3.0
+    assert jax.grad(lambda f: penalised(f, g, 4.0))(1.0) == 1.0
