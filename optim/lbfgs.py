@@ -39,7 +39,8 @@ class TrialLinesearchState(NamedTuple):
     ``anchor_value`` and the search ``direction`` from it (params' tree, the step is
     ``learning_rate·direction``); ``slope`` ``⟨direction, ∇f(anchor)⟩``; ``learning_rate`` the
     step of the pending trial; ``trials`` (int32) trials of this search evaluated so far, 0 before
-    the first evaluation of all."""
+    the first evaluation of all; ``accepted`` (bool) whether the point the last ``update`` was given
+    became the anchor (an iterate), as opposed to a rejected trial or a search given up."""
 
     direction_state: Any
     anchor: Any
@@ -48,6 +49,7 @@ class TrialLinesearchState(NamedTuple):
     slope: jax.Array
     learning_rate: jax.Array
     trials: jax.Array
+    accepted: jax.Array
 
 
 def lbfgs(
@@ -108,6 +110,7 @@ def lbfgs(
             slope=jnp.asarray(0.0, dtype),
             learning_rate=jnp.asarray(1.0, dtype),
             trials=jnp.asarray(0, jnp.int32),
+            accepted=jnp.asarray(False),
         )
 
     def update_fn(
@@ -157,6 +160,7 @@ def lbfgs(
             slope=jnp.where(accept, optax.tree.real(optax.tree.vdot(direction, grad)), state.slope),
             learning_rate=jnp.where(accept, lr0, lr_cut),
             trials=jnp.where(accept | give_up, 1, state.trials + 1).astype(jnp.int32),
+            accepted=accept,
         )
         new_state = optax.tree.cast_like(new_state, other_tree=state)
         return optax.tree.cast_like(step, other_tree=params), new_state
@@ -197,6 +201,16 @@ def evaluates_trial(opt_state: Any) -> jax.Array:
     array), as opposed to the start itself; ``False`` for other optimisers."""
     state = find_state(opt_state, TrialLinesearchState)
     return jnp.asarray(False) if state is None else state.trials > 0
+
+
+def evaluated_an_iterate(opt_state: Any) -> jax.Array:
+    """Whether the point the last ``update`` leading to ``opt_state`` was given is an iterate (bool
+    array): an accepted trial or the start for :func:`lbfgs`; always ``True`` for other optimisers,
+    whose every evaluation is an iterate.  A rejected trial's gradient says nothing about
+    convergence: a step into a region where the loss is flat (a saturated reparametrisation) has a
+    vanishing gradient and a higher loss."""
+    state = find_state(opt_state, TrialLinesearchState)
+    return jnp.asarray(True) if state is None else state.accepted
 
 
 def forget_reference(opt_state: Any) -> Any:

@@ -22,10 +22,10 @@ replays ``callback`` over the chunk's steps.  The compiled chunk is cached acros
 (:mod:`optim.compile_cache`): a second ``tune`` with the same loss object (or Problem), optimiser
 settings, reparametrisation, settings and shapes traces and compiles nothing.
 
-A start *converges* (and stops) when its gradient norm falls to ``gtol`` or its kept point has
-not improved by ``rtol`` (relative) for ``patience`` steps; ``TuneResult.converged`` says whether
-the start returned did, as opposed to running out of steps, and ``message`` gives the last
-gradient norm.
+A start *converges* (and stops) when its gradient norm at an iterate (not at a rejected line-search
+trial) falls to ``gtol`` or its kept point has not improved by ``rtol`` (relative) for ``patience``
+steps; ``TuneResult.converged`` says whether the start returned did, as opposed to running out of
+steps, and ``message`` gives the last gradient norm.
 
 Which point is kept: the evaluated iterate with the lowest objective — without constraints the
 loss; with ``"penalty"`` the penalised loss (the problem being solved); with
@@ -85,7 +85,7 @@ from jaxsim.core.validation import check_finite
 from jaxsim.problem import Problem, penalised
 from jaxsim.problem.reparam import apply, check_domain, invert
 from optim.compile_cache import LRUCache, callable_key, key_or_none
-from optim.lbfgs import evaluates_trial, find_state, forget_reference, is_trial_linesearch
+from optim.lbfgs import evaluated_an_iterate, evaluates_trial, find_state, forget_reference, is_trial_linesearch
 from optim.lbfgs import lbfgs as trial_lbfgs
 from optim.results import History, TuneResult, check_int, check_number, check_some_loss_finite
 
@@ -245,7 +245,9 @@ def _make_step(objective: Callable, opt: optax.GradientTransformation, reparam: 
             if trial_linesearch:  # the objective changed: the next trial cannot be compared with the anchor
                 new_state = _tree_where(move & due, forget_reference(new_state), new_state)
         since = jnp.where(keep & improved, 0, c.since_improve + 1)
-        active = c.active & ~(finite & (gnorm <= cfg.gtol))  # a NaN loss can come with a zero gradient
+        # a NaN loss can come with a zero gradient; a rejected line-search trial is not an iterate
+        stationary = finite & (gnorm <= cfg.gtol) & evaluated_an_iterate(new_state)
+        active = c.active & ~stationary
         if cfg.patience is not None:
             active = active & (since < cfg.patience)
         trials = optax.tree_utils.tree_get(new_state, "num_linesearch_steps", None) if extra_args else None
@@ -788,9 +790,9 @@ def _convergence(
     converged = alive and not active and not by_callback
     test = f"gtol={cfg.gtol:g}" + (f", patience={cfg.patience} at rtol={cfg.rtol:g}" if cfg.patience else "")
     if converged:
-        why = (
-            "gradient norm ≤ gtol" if last_g <= cfg.gtol else f"no relative improvement > rtol for {cfg.patience} steps"
-        )
+        # the last evaluation may be a rejected line-search trial: its gradient norm decides nothing
+        stalled = cfg.patience is not None and int(np.asarray(carry.since_improve)[idx]) >= cfg.patience
+        why = f"no relative improvement > rtol for {cfg.patience} steps" if stalled else "gradient norm ≤ gtol"
         head = reason or f"converged within {steps} steps"
         return True, f"{head}; start {idx} converged: {why} (last gradient norm {last_g:.3g})"
     if not reason:

@@ -9,7 +9,7 @@ import numpy as np
 import optax
 import pytest
 
-from optim.lbfgs import evaluates_trial, lbfgs
+from optim.lbfgs import evaluated_an_iterate, evaluates_trial, lbfgs
 from optim.tune import gradient_tuner, tune
 
 
@@ -143,6 +143,32 @@ def test_the_step_holds_one_copy_of_the_loss():
     ours = _copies_of_the_loss(lbfgs(), loss, x0)
     optax_ls = _copies_of_the_loss(optax.lbfgs(linesearch=optax.scale_by_backtracking_linesearch(20)), loss, x0)
     assert adam == ours == 1 and optax_ls == 2
+
+
+def test_a_rejected_trial_with_a_zero_gradient_does_not_stop_the_start():
+    """The second direction (curvature 0.02 from the first pair) jumps to u = 10, on a plateau where
+    the loss is higher and flat: a rejected trial, zero gradient.  The start goes on, cutting the
+    step, to the edge of the valley (u → 5⁻, loss → 0.25); stopping there on ``gnorm ≤ gtol`` left
+    it at the first accepted point, loss 0.9604."""
+
+    def loss(u):
+        return jnp.where(u[0] < 5.0, 0.01 * (u[0] - 10.0) ** 2, 1.0)
+
+    res = tune(loss, jnp.zeros(1), optimizer=lbfgs(), steps=40, gtol=1e-12, mode="forward")
+    assert 0.25 <= res.loss < 0.26 and 4.9 < float(res.params[0]) < 5.0
+    assert res.history.grad_norm[2] == 0.0 and res.history.loss[2] == 1.0  # the plateau trial, evaluated
+    assert not res.converged and "ran out of steps" in res.message
+
+
+def test_evaluated_an_iterate_tells_accepted_points_from_rejected_trials():
+    opt = lbfgs()
+    state = opt.init(jnp.zeros(1))
+    assert bool(evaluated_an_iterate(optax.adam(0.1).init(jnp.zeros(1))))
+    _, state = opt.update(jnp.ones(1), state, jnp.zeros(1), value=jnp.asarray(2.0))  # the start
+    assert bool(evaluated_an_iterate(state))
+    _, rejected = opt.update(jnp.ones(1), state, -jnp.ones(1), value=jnp.asarray(3.0))  # uphill
+    _, accepted = opt.update(jnp.ones(1), state, -jnp.ones(1), value=jnp.asarray(1.0))
+    assert not bool(evaluated_an_iterate(rejected)) and bool(evaluated_an_iterate(accepted))
 
 
 def test_evaluates_trial_and_bad_arguments():
