@@ -100,31 +100,36 @@ def levenberg_marquardt_solve(
     def gradient_small(r: jax.Array, J: jax.Array) -> jax.Array:
         return jnp.max(jnp.abs(J.T @ r)) <= gtol
 
+    # The start is the loop's first evaluation (``n_evals == 0``: taken whatever its cost), so the
+    # compiled loop holds one copy of the residuals' Jacobian program, not a second one before it.
     def body(s: LMState) -> LMState:
+        started = s.n_evals > 0
         g = s.J.T @ s.r
         A = s.J.T @ s.J
-        scale = jnp.maximum(s.scale, jnp.diagonal(A))
-        delta = jnp.linalg.solve(A + s.mu * jnp.diag(scale), -g)
+        scale = jnp.where(started, jnp.maximum(s.scale, jnp.diagonal(A)), s.scale)
+        system = jnp.where(started, A + s.mu * jnp.diag(scale), jnp.eye(A.shape[0], dtype=A.dtype))
+        delta = jnp.linalg.solve(system, -g)
         predicted = -(2.0 * delta @ g + delta @ A @ delta)  # ‖r‖² − ‖r + Jδ‖²
-        u_new = s.u + delta
+        u_new = jnp.where(started, s.u + delta, s.u)
         r_new, J_new = value_and_jacobian(u_new)
         cost_new = r_new @ r_new
+        finite = jnp.isfinite(cost_new) & jnp.all(jnp.isfinite(J_new))
         actual = s.cost - cost_new
         ratio = actual / predicted
-        accept = jnp.isfinite(cost_new) & jnp.all(jnp.isfinite(J_new)) & (predicted > 0) & (ratio > ACCEPT_RATIO)
+        accept = ~started | (finite & (predicted > 0) & (ratio > ACCEPT_RATIO))
         mu_ok = s.mu * jnp.maximum(1.0 / 3.0, 1.0 - (2.0 * ratio - 1.0) ** 3)
-        mu = jnp.where(accept, mu_ok, s.mu * s.nu)
-        nu = jnp.where(accept, 2.0, 2.0 * s.nu)
+        mu = jnp.where(started, jnp.where(accept, mu_ok, s.mu * s.nu), s.mu)
+        nu = jnp.where(started, jnp.where(accept, 2.0, 2.0 * s.nu), s.nu)
         u, r, J, cost = (
             jnp.where(accept, new, old) for new, old in ((u_new, s.u), (r_new, s.r), (J_new, s.J), (cost_new, s.cost))
         )
-        step = s.step + 1
+        step = s.step + started.astype(s.step.dtype)
         n_evals = s.n_evals + 1
-        small_step = accept & (jnp.linalg.norm(delta) <= xtol * (jnp.linalg.norm(s.u) + xtol))
-        small_gain = accept & (actual <= ftol * s.cost) & (predicted <= ftol * s.cost)
+        small_step = started & accept & (jnp.linalg.norm(delta) <= xtol * (jnp.linalg.norm(s.u) + xtol))
+        small_gain = started & accept & (actual <= ftol * s.cost) & (predicted <= ftol * s.cost)
         status = jnp.select(
-            [gradient_small(r, J), small_step, small_gain, mu > MAX_DAMPING, step >= max_steps],
-            [1, 2, 3, 5, 4],
+            [~finite & ~started, gradient_small(r, J), small_step, small_gain, mu > MAX_DAMPING, step >= max_steps],
+            [6, 1, 2, 3, 5, 4],
             0,
         ).astype(jnp.int32)
         return LMState(
@@ -144,23 +149,20 @@ def levenberg_marquardt_solve(
 
     def run(u0: jax.Array) -> LMState:
         u0 = jnp.asarray(u0)
-        r0, J0 = value_and_jacobian(u0)
-        cost0 = r0 @ r0
-        finite = jnp.isfinite(cost0) & jnp.all(jnp.isfinite(J0))
-        status0 = jnp.where(finite, jnp.where(gradient_small(r0, J0), 1, 0), 6)
-        status0 = jnp.where((status0 == 0) & (max_steps == 0), 4, status0)
+        m = jax.eval_shape(f, u0).shape[0]
+        n, dtype = u0.shape[0], u0.dtype
         state = LMState(
             u0,
-            r0,
-            J0,
-            cost0,
-            jnp.asarray(mu0, u0.dtype),
-            jnp.asarray(2.0, u0.dtype),
+            jnp.zeros((m,), dtype),
+            jnp.zeros((m, n), dtype),
+            jnp.asarray(jnp.inf, dtype),
+            jnp.asarray(mu0, dtype),
+            jnp.asarray(2.0, dtype),
             jnp.zeros_like(u0),
             jnp.asarray(0, jnp.int32),
-            jnp.asarray(1, jnp.int32),
-            jnp.asarray(status0, jnp.int32),
-            jnp.full((max_steps + 1,), cost0),
+            jnp.asarray(0, jnp.int32),
+            jnp.asarray(0, jnp.int32),
+            jnp.full((max_steps + 1,), jnp.inf, dtype),
             jnp.ones((max_steps + 1,), jnp.int32),
         )
         return jax.lax.while_loop(lambda s: s.status == 0, body, state)

@@ -238,3 +238,35 @@ def test_the_pure_kernel_vmaps_like_a_loop():
         np.testing.assert_allclose(batched.u[i], one.u, rtol=1e-12, atol=1e-14)
         assert int(batched.step[i]) == int(one.step) and int(batched.status[i]) == int(one.status)
     assert len(set(np.asarray(batched.step).tolist())) > 1  # the lanes did stop at different steps
+
+
+def _scans_in(jaxpr) -> int:
+    """``scan`` equations in a jaxpr and every jaxpr nested in it (loop bodies, branches)."""
+    n = 0
+    for eqn in jaxpr.eqns:
+        n += eqn.primitive.name == "scan"
+        for sub in jax.core.jaxprs_in_params(eqn.params):
+            n += _scans_in(sub)
+    return n
+
+
+def test_the_kernel_holds_one_copy_of_the_residuals_jacobian():
+    """The start is the loop's first evaluation: a residual function with one ``scan`` (a rollout)
+    appears once in the solver, inside the loop — a second copy before it doubled the compile."""
+    from jaxsim.core.least_squares import levenberg_marquardt_solve
+
+    t = jnp.linspace(0.0, 1.0, 20)
+
+    def rollout_residuals(u):  # a first-order lag simulated by scan, against a target response
+        def tick(x, tk):
+            x = x + 0.05 * (u[0] * jnp.sin(tk) - u[1] * x)
+            return x, x
+
+        return jax.lax.scan(tick, 0.0, t)[1] - 0.3 * t
+
+    for forward in (True, False):
+        jaxpr = jax.make_jaxpr(lambda u: levenberg_marquardt_solve(rollout_residuals, u, max_steps=5, forward=forward))
+        assert _scans_in(jaxpr(jnp.array([1.0, 0.5])).jaxpr) == 1 + (not forward)  # reverse: forward + adjoint scan
+    out = levenberg_marquardt_solve(rollout_residuals, jnp.array([1.0, 0.5]), max_steps=0)
+    assert int(out.status) == 4 and int(out.n_evals) == 1 and int(out.step) == 0
+    assert float(out.cost) == pytest.approx(float(jnp.sum(rollout_residuals(jnp.array([1.0, 0.5])) ** 2)), rel=1e-15)
