@@ -91,9 +91,9 @@ def test_every_race_problem_builds_from_the_studies_and_the_library():
 
 
 def test_budget_overrides_name_the_problem_and_field():
-    out = with_overrides(BUDGETS, ["fuzzy.particles=64", "fuzzy.iters=150", "pid.adam_lr=0.1"])
-    assert (out["fuzzy"].particles, out["fuzzy"].iters, out["fuzzy"].random_n) == (64, 150, BUDGETS["fuzzy"].random_n)
-    assert out["pid"].adam_lr == 0.1 and out["trms"] == BUDGETS["trms"] and BUDGETS["fuzzy"].particles == 16
+    out = with_overrides(BUDGETS, ["fuzzy.particles=16", "fuzzy.iters=20", "pid.adam_lr=0.1"])
+    assert (out["fuzzy"].particles, out["fuzzy"].iters, out["fuzzy"].random_n) == (16, 20, BUDGETS["fuzzy"].random_n)
+    assert out["pid"].adam_lr == 0.1 and out["trms"] == BUDGETS["trms"] and BUDGETS["fuzzy"].particles == 64
     for bad, match in [("fuzzy.nope=3", "FIELD in"), ("ship.iters=3", "PROBLEM in"), ("fuzzy.iters=-3", "positive")]:
         with pytest.raises(ValueError, match=match):
             with_overrides(BUDGETS, [bad])
