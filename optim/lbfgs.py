@@ -204,8 +204,8 @@ def evaluates_trial(opt_state: Any) -> jax.Array:
 
 
 def evaluated_an_iterate(opt_state: Any) -> jax.Array:
-    """Whether the point the last ``update`` leading to ``opt_state`` was given is an iterate (bool
-    array): an accepted trial or the start for :func:`lbfgs`; always ``True`` for other optimisers,
+    """Whether the point given to the ``update`` that returned ``opt_state`` is an iterate (bool
+    array): the start or an accepted trial for :func:`lbfgs`; always ``True`` for other optimisers,
     whose every evaluation is an iterate.  A rejected trial's gradient says nothing about
     convergence: a step into a region where the loss is flat (a saturated reparametrisation) has a
     vanishing gradient and a higher loss."""

@@ -92,8 +92,9 @@ def levenberg_marquardt_solve(
     """Minimise ``Σ f(u)²`` from ``u0 (n,)`` (``f(u) -> (m,)``); pure, ``jit``/``vmap``-able (the sizes and
     settings are static).  ``forward``: the Jacobian by forward mode (``None``: iff ``n ≤ m``).
     Returns the final :class:`LMState` (``status`` in :data:`STATUS`)."""
+    m = jax.eval_shape(f, jnp.asarray(u0)).shape[0]  # the residuals' length (traced once, not run)
     if forward is None:
-        forward = u0.shape[0] <= jax.eval_shape(f, u0).shape[0]
+        forward = u0.shape[0] <= m
     mu0 = damping
     value_and_jacobian = _value_and_jacobian(f, forward)
 
@@ -149,7 +150,6 @@ def levenberg_marquardt_solve(
 
     def run(u0: jax.Array) -> LMState:
         u0 = jnp.asarray(u0)
-        m = jax.eval_shape(f, u0).shape[0]
         n, dtype = u0.shape[0], u0.dtype
         state = LMState(
             u0,
