@@ -15,6 +15,7 @@ from jaxsim.core.rollout import ClosedLoop, Timing, fold, simulate
 from jaxsim.core.signals import Sine, Step
 from jaxsim.core.system import Controller, Estimator, gaussian_sensor
 from jaxsim.plants.second_order import static_plant
+from tests.jaxpr_loops import loop_depths
 
 PLANT = static_plant()
 TEMPLATE = pid(kp=1.0, ki=0.0, kd=0.0, tf=0.02, anti_windup="none")
@@ -66,25 +67,6 @@ def test_save_every_decimates_without_changing_the_simulation():
     np.testing.assert_array_equal(np.asarray(dec.x_final), np.asarray(full.x_final))
 
 
-def _loops(jaxpr) -> list[int]:
-    """Nesting depth of every loop (``scan``/``while``) in a jaxpr, outermost first."""
-    depths: list[int] = []
-
-    def walk(j, depth: int) -> None:
-        for e in j.eqns:
-            loop = e.primitive.name in ("scan", "while")
-            if loop:
-                depths.append(depth)
-            for v in e.params.values():
-                for sub in v if isinstance(v, (tuple, list)) else (v,):
-                    inner = getattr(sub, "jaxpr", sub)
-                    if hasattr(inner, "eqns"):
-                        walk(inner, depth + loop)
-
-    walk(jaxpr.jaxpr, 0)
-    return depths
-
-
 def test_the_tick_is_traced_once_per_loop_level():
     # save_every = 1 stores every tick: one loop, not a second (zero-trip) loop that would trace,
     # transform and compile another copy of the tick
@@ -92,8 +74,8 @@ def test_the_tick_is_traced_once_per_loop_level():
     run = lambda every: jax.make_jaxpr(  # noqa: E731
         lambda kp: simulate(_loop(dataclasses.replace(p, kp=kp)), jnp.zeros(2), Timing(2.0, 1e-3, save_every=every)).y
     )(0.8)
-    assert _loops(run(1)) == [0]
-    assert _loops(run(20)) == [0, 1]
+    assert loop_depths(run(1)) == [0]
+    assert loop_depths(run(20)) == [0, 1]
 
 
 def test_exact_lti_step_agrees_with_rk4():

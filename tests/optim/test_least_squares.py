@@ -15,6 +15,7 @@ from optim.compile_cache import clear_all
 from optim.least_squares import _COMPILED
 from optim.problems import PIDTuning
 from tests.jax_log import jax_messages
+from tests.jaxpr_loops import loop_depths
 
 # NIST StRD nonlinear regression, "Misra1a" (lower difficulty): y = b1·(1 − exp(−b2·x))
 MISRA_X = np.array([77.6, 114.9, 141.1, 190.8, 239.9, 289.0, 332.8, 378.4, 434.8, 477.3, 536.8, 593.1, 689.1, 760.0])
@@ -240,16 +241,6 @@ def test_the_pure_kernel_vmaps_like_a_loop():
     assert len(set(np.asarray(batched.step).tolist())) > 1  # the lanes did stop at different steps
 
 
-def _scans_in(jaxpr) -> int:
-    """``scan`` equations in a jaxpr and every jaxpr nested in it (loop bodies, branches)."""
-    n = 0
-    for eqn in jaxpr.eqns:
-        n += eqn.primitive.name == "scan"
-        for sub in jax.core.jaxprs_in_params(eqn.params):
-            n += _scans_in(sub)
-    return n
-
-
 def test_the_kernel_holds_one_copy_of_the_residuals_jacobian():
     """The start is the loop's first evaluation: a residual function with one ``scan`` (a rollout)
     appears once in the solver, inside the loop — a second copy before it doubled the compile."""
@@ -264,9 +255,9 @@ def test_the_kernel_holds_one_copy_of_the_residuals_jacobian():
 
         return jax.lax.scan(tick, 0.0, t)[1] - 0.3 * t
 
-    for forward in (True, False):
+    for forward, inside_the_loop in ((True, [1]), (False, [1, 1])):  # reverse: the rollout and its adjoint
         jaxpr = jax.make_jaxpr(lambda u: levenberg_marquardt_solve(rollout_residuals, u, max_steps=5, forward=forward))
-        assert _scans_in(jaxpr(jnp.array([1.0, 0.5])).jaxpr) == 1 + (not forward)  # reverse: forward + adjoint scan
+        assert loop_depths(jaxpr(jnp.array([1.0, 0.5]))) == [0, *inside_the_loop]  # the solver's while, then scans
     out = levenberg_marquardt_solve(rollout_residuals, jnp.array([1.0, 0.5]), max_steps=0)
     assert int(out.status) == 4 and int(out.n_evals) == 1 and int(out.step) == 0
     assert float(out.cost) == pytest.approx(float(jnp.sum(rollout_residuals(jnp.array([1.0, 0.5])) ** 2)), rel=1e-15)

@@ -14,6 +14,7 @@ from jaxsim.problem import Param, ParamSpace, Problem, Scenario, penalised
 from optim import tune
 from optim.problems import PIDTuning
 from tests.jax_log import jax_messages
+from tests.jaxpr_loops import loop_depths
 
 TUNING = PIDTuning(t_final=1.0)
 GAINS = jnp.asarray([6.0, 4.0, 0.3])
@@ -118,7 +119,7 @@ def test_from_loss_constraints_and_the_search_loss():
 
 def _loops(fn, *args) -> int:
     """Top-level scan/while loops in ``fn``'s jaxpr (one per simulation)."""
-    return sum(e.primitive.name in ("scan", "while") for e in jax.make_jaxpr(fn)(*args).jaxpr.eqns)
+    return loop_depths(jax.make_jaxpr(fn)(*args)).count(0)
 
 
 def test_from_terms_simulates_once_for_loss_and_constraints_and_tunes_as_two_calls_do():
